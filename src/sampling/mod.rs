@@ -1,0 +1,1 @@
+//! Deterministic sampling: pixel patterns and light samples.

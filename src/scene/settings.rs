@@ -1,0 +1,124 @@
+//! Render settings: every toggle of SPEC "Settings", per scene and overridable per run.
+
+use bevy_ecs::prelude::*;
+use glam::Vec3;
+use serde::{Deserialize, Serialize};
+
+use crate::shade::gradient::Gradient;
+
+/// How a hit is shaded (SPEC "Shading").
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum ShadingModel {
+    /// `light * kd * max(n.l, 0)`.
+    Lambertian,
+    /// Lambertian plus `light * ks * max(r.v, 0)^shininess`.
+    #[default]
+    Phong,
+    /// Lambertian plus `light * ks * max(n.h, 0)^shininess`.
+    BlinnPhong,
+    /// Lambertian with `kd` replaced by the gradient sampled at `n.l`.
+    LinearGradient,
+    /// Colour-codes the signed difference between Phong and Blinn-Phong.
+    LinearGradientComparison,
+}
+
+/// Which acceleration structure traces the rays.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum Acceleration {
+    /// A bounding volume hierarchy.
+    #[default]
+    Bvh,
+    /// Test every primitive (a one-leaf hierarchy), for comparison.
+    None,
+}
+
+/// How the BVH chooses its splits.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum BvhSplit {
+    /// Surface area heuristic over binned centroids.
+    #[default]
+    SahBinned,
+    /// Object median along the widest centroid axis.
+    Median,
+}
+
+/// Where camera samples fall inside their pixel.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum PixelSampling {
+    /// Independent uniform offsets.
+    #[default]
+    Uniform,
+    /// One jittered offset per cell of a `k x k` grid.
+    Stratified,
+}
+
+/// Every render setting, with SPEC's defaults.
+#[derive(Resource, Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(default, deny_unknown_fields)]
+pub struct Settings {
+    /// Shading on; off gives `light * kd`.
+    pub shading: bool,
+    /// The shading model.
+    pub shading_model: ShadingModel,
+    /// Gradient of the linear-gradient model, sampled at `cos_theta`.
+    pub gradient: Gradient,
+    /// Gradient of the comparison model, sampled at the signed Phong/Blinn-Phong difference.
+    pub comparison_gradient: Gradient,
+    /// Recursive reflections weighted by `ks`.
+    pub reflections: bool,
+    /// Recursive transparency blended by alpha, and transparent shadows.
+    pub transparency: bool,
+    /// Shadow rays; off means every light sample is visible.
+    pub shadows: bool,
+    /// Barycentric normal interpolation; off uses the geometric normal.
+    pub normal_interpolation: bool,
+    /// Diffuse textures replace `kd`.
+    pub texture_mapping: bool,
+    /// Bilinear texture filtering; off is nearest.
+    pub bilinear_filtering: bool,
+    /// Acceleration structure.
+    pub acceleration: Acceleration,
+    /// BVH split method.
+    pub bvh_split: BvhSplit,
+    /// Camera samples per pixel.
+    pub pixel_samples: u32,
+    /// Pixel sample pattern.
+    pub pixel_sampling: PixelSampling,
+    /// Samples per segment or parallelogram light.
+    pub shadow_samples: u32,
+    /// Maximum ray depth: camera rays have depth 0.
+    pub max_depth: u32,
+    /// Seed of every random number.
+    pub seed: u64,
+    /// Radiance of rays that hit nothing.
+    pub background: Vec3,
+}
+
+impl Default for Settings {
+    fn default() -> Self {
+        Self {
+            shading: true,
+            shading_model: ShadingModel::Phong,
+            gradient: Gradient::default_shading(),
+            comparison_gradient: Gradient::default_comparison(),
+            reflections: true,
+            transparency: true,
+            shadows: true,
+            normal_interpolation: true,
+            texture_mapping: true,
+            bilinear_filtering: true,
+            acceleration: Acceleration::Bvh,
+            bvh_split: BvhSplit::SahBinned,
+            pixel_samples: 1,
+            pixel_sampling: PixelSampling::Uniform,
+            shadow_samples: 4,
+            max_depth: 6,
+            seed: 0,
+            background: Vec3::ZERO,
+        }
+    }
+}

@@ -1,0 +1,4 @@
+//! Shading models and texture lookup.
+
+pub mod gradient;
+pub mod texture;
