@@ -6,3 +6,6 @@ pub mod accel;
 pub mod sampling;
 pub mod scene;
 pub mod shade;
+pub mod error;
+
+pub use error::{GlintError, Result};

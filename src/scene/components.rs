@@ -163,7 +163,3 @@ pub struct ParallelogramLight {
     /// Colour at `v0 + edge01 + edge02`.
     pub color3: Vec3,
 }
-
-/// The name an entity had in its scene file, for error messages and `glint info`.
-#[derive(Component, Clone, Debug, PartialEq, Eq)]
-pub struct Name(pub String);

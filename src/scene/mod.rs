@@ -1,7 +1,11 @@
 //! The scene: components, settings, the RON format and its loader.
 
 pub mod components;
+pub mod format;
+pub mod load;
 pub mod settings;
+pub mod shapes;
 
 pub use components::*;
+pub use load::{SceneSource, parse_scene, read_scene, spawn_scene};
 pub use settings::*;

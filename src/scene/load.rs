@@ -1,0 +1,474 @@
+//! Reads a RON scene, validates every value, and spawns it into a `World`.
+
+use std::collections::HashMap;
+use std::path::{Path, PathBuf};
+use std::sync::Arc;
+
+use bevy_ecs::prelude::*;
+use glam::{Affine3A, EulerRot, Quat, Vec3};
+
+use super::components::*;
+use super::format::*;
+use super::settings::Settings;
+use super::shapes;
+use crate::error::{GlintError, Result};
+
+/// Largest accepted image side, in pixels.
+pub const MAX_IMAGE_SIDE: u32 = 32768;
+/// Largest accepted ray depth.
+pub const MAX_DEPTH_LIMIT: u32 = 1024;
+/// Largest accepted sample counts (per pixel and per area light).
+pub const MAX_SAMPLES: u32 = 1 << 16;
+
+/// The scene file a world was loaded from, for resolving relative paths and for messages.
+#[derive(Resource, Clone, Debug, Default)]
+pub struct SceneSource {
+    /// The scene file.
+    pub path: PathBuf,
+    /// Non-fatal problems found while loading (each already repaired).
+    pub warnings: Vec<String>,
+}
+
+/// Reads and parses a scene file (no validation yet).
+pub fn read_scene(path: &Path) -> Result<SceneFile> {
+    let text = std::fs::read_to_string(path).map_err(|source| GlintError::Io {
+        path: path.to_owned(),
+        source,
+    })?;
+    parse_scene(&text, path)
+}
+
+/// Parses scene text; `path` is only used in messages.
+pub fn parse_scene(text: &str, path: &Path) -> Result<SceneFile> {
+    ron::Options::default()
+        .from_str(text)
+        .map_err(|e: ron::error::SpannedError| GlintError::Syntax {
+            path: path.to_owned(),
+            line: e.span.start.line,
+            col: e.span.start.col,
+            message: e.code.to_string(),
+        })
+}
+
+/// Validation context: the file and the entity being checked.
+struct Check<'a> {
+    path: &'a Path,
+    entity: String,
+}
+
+impl Check<'_> {
+    fn err(&self, field: &str, message: impl Into<String>) -> GlintError {
+        GlintError::Invalid {
+            path: self.path.to_owned(),
+            entity: self.entity.clone(),
+            field: field.to_owned(),
+            message: message.into(),
+        }
+    }
+
+    fn finite(&self, field: &str, v: Vec3) -> Result<Vec3> {
+        if v.is_finite() {
+            Ok(v)
+        } else {
+            Err(self.err(field, format!("must be finite, got {v}")))
+        }
+    }
+
+    fn colour(&self, field: &str, v: Vec3) -> Result<Vec3> {
+        self.finite(field, v)?;
+        if v.min_element() < 0.0 {
+            return Err(self.err(field, format!("colour must not be negative, got {v}")));
+        }
+        Ok(v)
+    }
+
+    fn scalar(&self, field: &str, v: f32, lo: f32, hi: f32) -> Result<f32> {
+        if v.is_finite() && v >= lo && v <= hi {
+            Ok(v)
+        } else {
+            Err(self.err(field, format!("must be in [{lo}, {hi}], got {v}")))
+        }
+    }
+}
+
+/// Checks the settings' numeric fields.
+pub fn validate_settings(s: &Settings, path: &Path) -> Result<()> {
+    let c = Check {
+        path,
+        entity: "settings".into(),
+    };
+    for (field, g) in [
+        ("gradient", &s.gradient),
+        ("comparison_gradient", &s.comparison_gradient),
+    ] {
+        if g.components().is_empty() {
+            return Err(c.err(field, "a gradient needs at least one component"));
+        }
+        for &(t, col) in g.components() {
+            c.scalar(field, t, f32::MIN, f32::MAX)?;
+            c.colour(field, col)?;
+        }
+    }
+    for (field, v) in [
+        ("pixel_samples", s.pixel_samples),
+        ("shadow_samples", s.shadow_samples),
+    ] {
+        if v == 0 || v > MAX_SAMPLES {
+            return Err(c.err(field, format!("must be in [1, {MAX_SAMPLES}], got {v}")));
+        }
+    }
+    if s.max_depth > MAX_DEPTH_LIMIT {
+        return Err(c.err(
+            "max_depth",
+            format!("must be at most {MAX_DEPTH_LIMIT}, got {}", s.max_depth),
+        ));
+    }
+    c.colour("background", s.background)?;
+    Ok(())
+}
+
+/// Checks the camera and converts it to the component.
+pub fn validate_camera(d: &CameraDesc, path: &Path) -> Result<Camera> {
+    let c = Check {
+        path,
+        entity: "camera".into(),
+    };
+    let position = c.finite("position", d.position)?;
+    let look_at = c.finite("look_at", d.look_at)?;
+    let up = c.finite("up", d.up)?;
+    let forward = (look_at - position)
+        .try_normalize()
+        .ok_or_else(|| c.err("look_at", "must differ from position"))?;
+    let up_n = up
+        .try_normalize()
+        .ok_or_else(|| c.err("up", "must not be zero"))?;
+    if forward.cross(up_n).length() < 1e-6 {
+        return Err(c.err("up", "must not be parallel to the view direction"));
+    }
+    let fov = d.fov_y;
+    if !(fov.is_finite() && fov > 0.0 && fov < 180.0) {
+        return Err(c.err("fov_y", format!("must be in (0, 180) degrees, got {fov}")));
+    }
+    for (field, v) in [("width", d.width), ("height", d.height)] {
+        if v == 0 || v > MAX_IMAGE_SIDE {
+            return Err(c.err(field, format!("must be in [1, {MAX_IMAGE_SIDE}], got {v}")));
+        }
+    }
+    Ok(Camera {
+        position,
+        look_at,
+        up,
+        fov_y_degrees: fov,
+        width: d.width,
+        height: d.height,
+    })
+}
+
+fn validate_material(name: &str, d: &MaterialDesc, path: &Path) -> Result<Material> {
+    let c = Check {
+        path,
+        entity: format!("material \"{name}\""),
+    };
+    let kd_texture = match &d.kd_texture {
+        None => None,
+        Some(file) => {
+            let resolved = resolve(path, file);
+            if !resolved.is_file() {
+                return Err(c.err(
+                    "kd_texture",
+                    format!("file not found: {}", resolved.display()),
+                ));
+            }
+            Some(TextureSource::File(resolved))
+        }
+    };
+    Ok(Material {
+        name: name.to_owned(),
+        kd: c.colour("kd", d.kd)?,
+        ks: c.colour("ks", d.ks)?,
+        shininess: c.scalar("shininess", d.shininess, 0.0, f32::MAX)?,
+        transparency: c.scalar("transparency", d.transparency, 0.0, 1.0)?,
+        kd_texture,
+        wrap: [d.wrap.0, d.wrap.1],
+    })
+}
+
+/// A path in a scene file, relative to the scene file's folder.
+pub fn resolve(scene: &Path, file: &str) -> PathBuf {
+    scene.parent().unwrap_or(Path::new(".")).join(file)
+}
+
+fn validate_transform(c: &Check, d: &TransformDesc) -> Result<Transform> {
+    let translate = c.finite("transform.translate", d.translate)?;
+    let rotate = c.finite("transform.rotate_degrees", d.rotate_degrees)?;
+    let scale = c.finite("transform.scale", d.scale)?;
+    if scale.abs().min_element() == 0.0 {
+        return Err(c.err("transform.scale", "must not be zero along any axis"));
+    }
+    let rotation = Quat::from_euler(
+        EulerRot::ZYX,
+        rotate.z.to_radians(),
+        rotate.y.to_radians(),
+        rotate.x.to_radians(),
+    );
+    Ok(Transform {
+        world_from_object: Affine3A::from_scale_rotation_translation(scale, rotation, translate),
+    })
+}
+
+fn inline_mesh(
+    c: &Check,
+    vertices: &[VertexDesc],
+    triangles: &[[u32; 3]],
+    warnings: &mut Vec<String>,
+) -> Result<MeshData> {
+    for (i, v) in vertices.iter().enumerate() {
+        c.finite(&format!("vertices[{i}].position"), v.position)?;
+        if !v.texcoord.is_finite() {
+            return Err(c.err(
+                &format!("vertices[{i}].texcoord"),
+                format!("must be finite, got {}", v.texcoord),
+            ));
+        }
+        if let Some(n) = v.normal {
+            c.finite(&format!("vertices[{i}].normal"), n)?;
+        }
+    }
+    for (i, t) in triangles.iter().enumerate() {
+        if let Some(&bad) = t.iter().find(|&&k| k as usize >= vertices.len()) {
+            return Err(c.err(
+                &format!("triangles[{i}]"),
+                format!(
+                    "vertex index {bad} out of range ({} vertices)",
+                    vertices.len()
+                ),
+            ));
+        }
+    }
+    let positions: Vec<Vec3> = vertices.iter().map(|v| v.position).collect();
+    let derived = shapes::smooth_normals(&positions, triangles);
+    let mut repaired = 0;
+    let vertices = vertices
+        .iter()
+        .zip(derived)
+        .map(|(v, derived)| {
+            let normal = match v.normal {
+                None => derived,
+                Some(n) => n.try_normalize().unwrap_or_else(|| {
+                    repaired += 1;
+                    derived
+                }),
+            };
+            Vertex {
+                position: v.position,
+                normal,
+                texcoord: v.texcoord,
+            }
+        })
+        .collect();
+    if repaired > 0 {
+        warnings.push(format!(
+            "{}: {}: {repaired} zero-length normal(s) replaced by normals derived from the triangles",
+            c.path.display(),
+            c.entity
+        ));
+    }
+    Ok(MeshData {
+        vertices,
+        triangles: triangles.to_vec(),
+    })
+}
+
+fn shape_mesh(c: &Check, g: &GeometryDesc, warnings: &mut Vec<String>) -> Result<MeshData> {
+    let positive = |field: &str, v: u32, max: u32| {
+        if v == 0 || v > max {
+            Err(c.err(field, format!("must be in [1, {max}], got {v}")))
+        } else {
+            Ok(v)
+        }
+    };
+    Ok(match g {
+        GeometryDesc::Inline {
+            vertices,
+            triangles,
+        } => inline_mesh(c, vertices, triangles, warnings)?,
+        GeometryDesc::Quad => shapes::quad(),
+        GeometryDesc::Parallelogram {
+            origin,
+            edge_u,
+            edge_v,
+        } => {
+            c.finite("geometry.origin", *origin)?;
+            c.finite("geometry.edge_u", *edge_u)?;
+            c.finite("geometry.edge_v", *edge_v)?;
+            if edge_u.cross(*edge_v).length() == 0.0 {
+                return Err(c.err("geometry", "edges must not be parallel or zero"));
+            }
+            shapes::parallelogram(*origin, *edge_u, *edge_v)
+        }
+        GeometryDesc::Cube => shapes::cube(),
+        GeometryDesc::Plane { subdivisions } => {
+            shapes::plane(positive("geometry.subdivisions", *subdivisions, 4096)?)
+        }
+        GeometryDesc::UvSphere { segments, rings } => shapes::uv_sphere(
+            positive("geometry.segments", *segments, 1 << 14)?.max(3),
+            positive("geometry.rings", *rings, 1 << 14)?.max(2),
+        ),
+        GeometryDesc::Icosphere { subdivisions } => {
+            if *subdivisions > 9 {
+                return Err(c.err(
+                    "geometry.subdivisions",
+                    format!("must be at most 9, got {subdivisions}"),
+                ));
+            }
+            shapes::icosphere(*subdivisions)
+        }
+        GeometryDesc::Gltf { .. } | GeometryDesc::Obj { .. } => unreachable!("handled by caller"),
+    })
+}
+
+fn entity_label(kind: &str, index: usize, name: &Option<String>) -> String {
+    match name {
+        Some(n) => format!("entities[{index}] ({kind} \"{n}\")"),
+        None => format!("entities[{index}] ({kind})"),
+    }
+}
+
+/// Validates a parsed scene and spawns it: materials, camera, geometry and lights become
+/// entities, the settings a resource. On error nothing is left half-spawned in a way
+/// that matters: the caller discards the world.
+pub fn spawn_scene(world: &mut World, file: &SceneFile, path: &Path) -> Result<()> {
+    let mut warnings = Vec::new();
+    validate_settings(&file.settings, path)?;
+    let camera = validate_camera(&file.camera, path)?;
+
+    let mut materials: HashMap<&str, Entity> = HashMap::new();
+    for (name, desc) in &file.materials {
+        let m = validate_material(name, desc, path)?;
+        let e = world.spawn((Name::new(name.clone()), m)).id();
+        materials.insert(name.as_str(), e);
+    }
+    let material_ref = |c: &Check, name: &Option<String>| -> Result<MaterialRef> {
+        let name = name
+            .as_deref()
+            .ok_or_else(|| c.err("material", "missing"))?;
+        materials.get(name).map(|&e| MaterialRef(e)).ok_or_else(|| {
+            let known: Vec<&str> = materials.keys().copied().collect();
+            c.err(
+                "material",
+                format!("unknown material \"{name}\" (defined: {})", known.join(", ")),
+            )
+        })
+    };
+
+    world.spawn((Name::new("camera"), camera));
+    for (index, entity) in file.entities.iter().enumerate() {
+        match entity {
+            EntityDesc::Mesh(d) => {
+                let c = Check {
+                    path,
+                    entity: entity_label("Mesh", index, &d.name),
+                };
+                let transform = validate_transform(&c, &d.transform)?;
+                let name = Name::new(d.name.clone().unwrap_or_else(|| format!("mesh {index}")));
+                match &d.geometry {
+                    GeometryDesc::Gltf { path: file, .. } | GeometryDesc::Obj { path: file } => {
+                        return Err(c.err(
+                            "geometry",
+                            format!(
+                                "importing {} is not supported yet",
+                                resolve(path, file).display()
+                            ),
+                        ));
+                    }
+                    g => {
+                        let data = shape_mesh(&c, g, &mut warnings)?;
+                        let material = material_ref(&c, &d.material)?;
+                        world.spawn((
+                            name,
+                            Mesh {
+                                data: Arc::new(data),
+                            },
+                            transform,
+                            material,
+                        ));
+                    }
+                }
+            }
+            EntityDesc::Sphere(d) => {
+                let c = Check {
+                    path,
+                    entity: entity_label("Sphere", index, &d.name),
+                };
+                let center = c.finite("center", d.center)?;
+                if !(d.radius.is_finite() && d.radius > 0.0) {
+                    return Err(c.err(
+                        "radius",
+                        format!("must be positive and finite, got {}", d.radius),
+                    ));
+                }
+                let material = material_ref(&c, &Some(d.material.clone()))?;
+                world.spawn((
+                    Name::new(d.name.clone().unwrap_or_else(|| format!("sphere {index}"))),
+                    Sphere {
+                        center,
+                        radius: d.radius,
+                    },
+                    material,
+                ));
+            }
+            EntityDesc::PointLight(d) => {
+                let c = Check {
+                    path,
+                    entity: entity_label("PointLight", index, &d.name),
+                };
+                world.spawn((
+                    Name::new(d.name.clone().unwrap_or_else(|| format!("light {index}"))),
+                    PointLight {
+                        position: c.finite("position", d.position)?,
+                        color: c.colour("color", d.color)?,
+                    },
+                ));
+            }
+            EntityDesc::SegmentLight(d) => {
+                let c = Check {
+                    path,
+                    entity: entity_label("SegmentLight", index, &d.name),
+                };
+                world.spawn((
+                    Name::new(d.name.clone().unwrap_or_else(|| format!("light {index}"))),
+                    SegmentLight {
+                        endpoint0: c.finite("endpoint0", d.endpoint0)?,
+                        endpoint1: c.finite("endpoint1", d.endpoint1)?,
+                        color0: c.colour("color0", d.color0)?,
+                        color1: c.colour("color1", d.color1)?,
+                    },
+                ));
+            }
+            EntityDesc::ParallelogramLight(d) => {
+                let c = Check {
+                    path,
+                    entity: entity_label("ParallelogramLight", index, &d.name),
+                };
+                world.spawn((
+                    Name::new(d.name.clone().unwrap_or_else(|| format!("light {index}"))),
+                    ParallelogramLight {
+                        v0: c.finite("v0", d.v0)?,
+                        edge01: c.finite("edge01", d.edge01)?,
+                        edge02: c.finite("edge02", d.edge02)?,
+                        color0: c.colour("color0", d.color0)?,
+                        color1: c.colour("color1", d.color1)?,
+                        color2: c.colour("color2", d.color2)?,
+                        color3: c.colour("color3", d.color3)?,
+                    },
+                ));
+            }
+        }
+    }
+    world.insert_resource(file.settings.clone());
+    world.insert_resource(SceneSource {
+        path: path.to_owned(),
+        warnings,
+    });
+    Ok(())
+}
