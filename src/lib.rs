@@ -1,11 +1,22 @@
 //! glint: a small CPU ray tracer built as a data-oriented ECS.
+//!
+//! A RON scene is spawned into a `bevy_ecs::World` ([`scene`]); the schedules of
+//! [`schedule`] build the acceleration structures ([`accel`]), generate camera samples
+//! ([`sampling`]), trace wavefronts ([`trace`]) with the shading models of [`shade`],
+//! and accumulate the [`film`]. [`render::Renderer`] drives a render.
 #![forbid(unsafe_code)]
 #![warn(missing_docs)]
 
 pub mod accel;
+pub mod error;
+pub mod film;
+pub mod info;
+pub mod render;
 pub mod sampling;
 pub mod scene;
+pub mod schedule;
 pub mod shade;
-pub mod error;
+pub mod trace;
 
 pub use error::{GlintError, Result};
+pub use render::{Overrides, RenderSummary, Renderer};

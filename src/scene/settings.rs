@@ -122,3 +122,105 @@ impl Default for Settings {
         }
     }
 }
+
+impl Settings {
+    /// The names accepted by [`Settings::set`], in declaration order.
+    pub const KEYS: [&'static str; 18] = [
+        "shading",
+        "shading_model",
+        "gradient",
+        "comparison_gradient",
+        "reflections",
+        "transparency",
+        "shadows",
+        "normal_interpolation",
+        "texture_mapping",
+        "bilinear_filtering",
+        "acceleration",
+        "bvh_split",
+        "pixel_samples",
+        "pixel_sampling",
+        "shadow_samples",
+        "max_depth",
+        "seed",
+        "background",
+    ];
+
+    /// Sets one field from its RON text, e.g. `("shading_model", "blinn_phong")`.
+    pub fn set(&mut self, key: &str, value: &str) -> Result<(), String> {
+        fn parse<T: serde::de::DeserializeOwned>(key: &str, value: &str) -> Result<T, String> {
+            ron::from_str(value).map_err(|e| format!("{key}={value}: {}", e.code))
+        }
+        macro_rules! fields {
+            ($($field:ident),*) => {
+                match key {
+                    $(stringify!($field) => self.$field = parse(key, value)?,)*
+                    _ => {
+                        return Err(format!(
+                            "unknown setting \"{key}\" (known: {})",
+                            Self::KEYS.join(", ")
+                        ))
+                    }
+                }
+            };
+        }
+        fields!(
+            shading,
+            shading_model,
+            gradient,
+            comparison_gradient,
+            reflections,
+            transparency,
+            shadows,
+            normal_interpolation,
+            texture_mapping,
+            bilinear_filtering,
+            acceleration,
+            bvh_split,
+            pixel_samples,
+            pixel_sampling,
+            shadow_samples,
+            max_depth,
+            seed,
+            background
+        );
+        Ok(())
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn set_parses_each_kind_of_value() {
+        let mut s = Settings::default();
+        s.set("shading_model", "blinn_phong").unwrap();
+        s.set("shadows", "false").unwrap();
+        s.set("pixel_samples", "16").unwrap();
+        s.set("background", "(0.1, 0.2, 0.3)").unwrap();
+        s.set("gradient", "[(1, (0, 1, 0)), (0, (1, 0, 0))]").unwrap();
+        assert_eq!(s.shading_model, ShadingModel::BlinnPhong);
+        assert!(!s.shadows);
+        assert_eq!(s.pixel_samples, 16);
+        assert_eq!(s.background, Vec3::new(0.1, 0.2, 0.3));
+        assert_eq!(s.gradient.components()[0].0, 0.0);
+    }
+
+    #[test]
+    fn set_rejects_unknown_keys_and_bad_values() {
+        let mut s = Settings::default();
+        assert!(s.set("shadow", "true").unwrap_err().contains("unknown setting"));
+        assert!(s.set("pixel_samples", "many").is_err());
+        assert!(s.set("shading_model", "toon").is_err());
+    }
+
+    #[test]
+    fn keys_list_every_field() {
+        let ron = ron::to_string(&Settings::default()).unwrap();
+        for key in Settings::KEYS {
+            assert!(ron.contains(&format!("{key}:")), "{key} missing");
+        }
+        assert_eq!(ron.matches(':').count(), Settings::KEYS.len());
+    }
+}

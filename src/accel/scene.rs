@@ -1,0 +1,263 @@
+//! The scene's geometry as the hot loops see it: world-space triangles and spheres in
+//! flat arrays, each kind under its own BVH, with closest-hit and visibility queries.
+
+use bevy_ecs::prelude::*;
+use glam::{Vec2, Vec3};
+
+use super::{
+    Aabb, Bvh, Ray, SplitMethod, TraversalVisitor, intersect_sphere, intersect_triangle,
+    triangle::{RayShear, intersect_triangle_sheared},
+};
+use crate::scene::{Acceleration, BvhSplit, Mesh, Settings, Sphere, Transform};
+use crate::trace::materials::Materials;
+use crate::trace::stats::RenderStats;
+
+/// Which kind of primitive a hit is on.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum PrimKind {
+    /// A triangle of a mesh.
+    Triangle,
+    /// An analytic sphere.
+    Sphere,
+}
+
+/// The closest intersection of a ray.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Hit {
+    /// Ray parameter.
+    pub t: f32,
+    /// Primitive index within its kind.
+    pub prim: u32,
+    /// Triangle or sphere.
+    pub kind: PrimKind,
+    /// Barycentric weights of the triangle's vertices (zero for spheres).
+    pub bary: Vec3,
+}
+
+/// World-space geometry in flat arrays, and one BVH per primitive kind.
+#[derive(Resource, Clone, Debug, Default)]
+pub struct SceneGeometry {
+    /// Triangle vertex positions.
+    pub tri_positions: Vec<[Vec3; 3]>,
+    /// Triangle vertex normals (unit).
+    pub tri_normals: Vec<[Vec3; 3]>,
+    /// Triangle vertex texture coordinates.
+    pub tri_texcoords: Vec<[Vec2; 3]>,
+    /// Material index of each triangle.
+    pub tri_material: Vec<u32>,
+    /// Hierarchy over the triangles.
+    pub tri_bvh: Bvh,
+    /// Spheres (world space).
+    pub spheres: Vec<Sphere>,
+    /// Material index of each sphere.
+    pub sphere_material: Vec<u32>,
+    /// Hierarchy over the spheres.
+    pub sphere_bvh: Bvh,
+}
+
+fn split_method(s: &Settings) -> SplitMethod {
+    match s.bvh_split {
+        BvhSplit::SahBinned => SplitMethod::SahBinned,
+        BvhSplit::Median => SplitMethod::Median,
+    }
+}
+
+fn build(bounds: &[Aabb], s: &Settings) -> Bvh {
+    match s.acceleration {
+        Acceleration::Bvh => Bvh::build(bounds, split_method(s)),
+        Acceleration::None => Bvh::single_leaf(bounds),
+    }
+}
+
+/// Transforms every mesh to world space and builds the triangle BVH.
+pub fn build_triangle_bvh(
+    settings: Res<Settings>,
+    meshes: Query<(&Mesh, &Transform, &crate::scene::MaterialRef)>,
+    materials: Res<Materials>,
+    mut geometry: ResMut<SceneGeometry>,
+    mut stats: ResMut<RenderStats>,
+) {
+    let g = &mut *geometry;
+    for (mesh, transform, material) in &meshes {
+        let m = transform.world_from_object;
+        let normal_from_object = m.matrix3.inverse().transpose();
+        let material = materials.index_of.get(&material.0).copied().unwrap_or(0);
+        let v = &mesh.data.vertices;
+        for t in &mesh.data.triangles {
+            let [a, b, c] = t.map(|i| &v[i as usize]);
+            g.tri_positions.push([a, b, c].map(|v| m.transform_point3(v.position)));
+            g.tri_normals.push([a, b, c].map(|v| {
+                (normal_from_object * glam::Vec3A::from(v.normal))
+                    .try_normalize()
+                    .map_or(Vec3::Z, Vec3::from)
+            }));
+            g.tri_texcoords.push([a.texcoord, b.texcoord, c.texcoord]);
+            g.tri_material.push(material);
+        }
+    }
+    let bounds: Vec<Aabb> = g
+        .tri_positions
+        .iter()
+        .map(|p| Aabb::from_points(p))
+        .collect();
+    g.tri_bvh = build(&bounds, &settings);
+    stats.record("build_triangle_bvh", bounds.len() as u64);
+}
+
+/// Gathers the spheres and builds their BVH.
+pub fn build_sphere_bvh(
+    settings: Res<Settings>,
+    spheres: Query<(&Sphere, &crate::scene::MaterialRef)>,
+    materials: Res<Materials>,
+    mut geometry: ResMut<SceneGeometry>,
+    mut stats: ResMut<RenderStats>,
+) {
+    let g = &mut *geometry;
+    for (s, material) in &spheres {
+        g.spheres.push(*s);
+        g.sphere_material
+            .push(materials.index_of.get(&material.0).copied().unwrap_or(0));
+    }
+    let bounds: Vec<Aabb> = g
+        .spheres
+        .iter()
+        .map(|s| Aabb {
+            min: s.center - Vec3::splat(s.radius),
+            max: s.center + Vec3::splat(s.radius),
+        })
+        .collect();
+    g.sphere_bvh = build(&bounds, &settings);
+    stats.record("build_sphere_bvh", bounds.len() as u64);
+}
+
+impl SceneGeometry {
+    /// The closest hit in (0, t_max), triangles and spheres alike.
+    pub fn intersect(
+        &self,
+        ray: &Ray,
+        t_max: f32,
+        visitor: &mut impl TraversalVisitor,
+    ) -> Option<Hit> {
+        let mut best: Option<Hit> = None;
+        let mut t_max = t_max;
+        if !self.tri_bvh.nodes.is_empty() {
+            let shear = RayShear::new(ray);
+            let found = self.tri_bvh.closest_hit(ray, t_max, visitor, |p, tm| {
+                let [a, b, c] = self.tri_positions[p as usize];
+                intersect_triangle_sheared(&shear, ray.origin, a, b, c, tm).map(|h| h.t)
+            });
+            if let Some((prim, _)) = found {
+                // Re-run the winning test for its barycentrics; it is deterministic.
+                let [a, b, c] = self.tri_positions[prim as usize];
+                if let Some(h) = intersect_triangle_sheared(&shear, ray.origin, a, b, c, t_max) {
+                    t_max = h.t;
+                    best = Some(Hit {
+                        t: h.t,
+                        prim,
+                        kind: PrimKind::Triangle,
+                        bary: Vec3::new(h.b0, h.b1, h.b2),
+                    });
+                }
+            }
+        }
+        if !self.sphere_bvh.nodes.is_empty() {
+            let found = self.sphere_bvh.closest_hit(ray, t_max, visitor, |p, tm| {
+                let s = &self.spheres[p as usize];
+                intersect_sphere(ray, s.center, s.radius, tm)
+            });
+            if let Some((prim, t)) = found {
+                best = Some(Hit {
+                    t,
+                    prim,
+                    kind: PrimKind::Sphere,
+                    bary: Vec3::ZERO,
+                });
+            }
+        }
+        best
+    }
+
+    /// Whether anything lies on the ray in (0, t_max).
+    pub fn occluded(&self, ray: &Ray, t_max: f32, visitor: &mut impl TraversalVisitor) -> bool {
+        let tris = !self.tri_bvh.nodes.is_empty()
+            && self.tri_bvh.any_hit(ray, t_max, visitor, |p| {
+                let [a, b, c] = self.tri_positions[p as usize];
+                intersect_triangle(ray, a, b, c, t_max).is_some()
+            });
+        tris || (!self.sphere_bvh.nodes.is_empty()
+            && self.sphere_bvh.any_hit(ray, t_max, visitor, |p| {
+                let s = &self.spheres[p as usize];
+                intersect_sphere(ray, s.center, s.radius, t_max).is_some()
+            }))
+    }
+
+    /// Light transmitted along the ray through (0, t_max): the product over every surface
+    /// crossed of `(1 - alpha) * (1 - (1 - kd) * alpha)`; zero at the first opaque one.
+    pub fn transmittance(
+        &self,
+        ray: &Ray,
+        t_max: f32,
+        materials: &Materials,
+        visitor: &mut impl TraversalVisitor,
+    ) -> Vec3 {
+        let mut tint = Vec3::ONE;
+        let mut cross = |material: u32, uv: Vec2| -> bool {
+            let alpha = materials.list[material as usize].alpha;
+            if alpha >= 1.0 {
+                tint = Vec3::ZERO;
+                return true;
+            }
+            let kd = materials.kd_at(material, uv);
+            tint *= (1.0 - alpha) * (Vec3::ONE - (Vec3::ONE - kd) * alpha);
+            tint == Vec3::ZERO
+        };
+        if !self.tri_bvh.nodes.is_empty() {
+            let stopped = self.tri_bvh.any_hit(ray, t_max, visitor, |p| {
+                let [a, b, c] = self.tri_positions[p as usize];
+                match intersect_triangle(ray, a, b, c, t_max) {
+                    Some(h) => {
+                        let [ta, tb, tc] = self.tri_texcoords[p as usize];
+                        let uv = h.b0 * ta + h.b1 * tb + h.b2 * tc;
+                        cross(self.tri_material[p as usize], uv)
+                    }
+                    None => false,
+                }
+            });
+            if stopped {
+                return Vec3::ZERO;
+            }
+        }
+        if !self.sphere_bvh.nodes.is_empty() {
+            self.sphere_bvh.any_hit(ray, t_max, visitor, |p| {
+                let s = &self.spheres[p as usize];
+                match intersect_sphere(ray, s.center, s.radius, t_max) {
+                    Some(t) => {
+                        let n = (ray.origin + t * ray.dir - s.center) / s.radius;
+                        cross(self.sphere_material[p as usize], sphere_uv(n))
+                    }
+                    None => false,
+                }
+            });
+        }
+        tint
+    }
+
+    /// Bounds of all geometry (empty when there is none).
+    pub fn bounds(&self) -> Aabb {
+        let mut b = Aabb::EMPTY;
+        if !self.tri_bvh.nodes.is_empty() {
+            b = b.union(self.tri_bvh.bounds());
+        }
+        if !self.sphere_bvh.nodes.is_empty() {
+            b = b.union(self.sphere_bvh.bounds());
+        }
+        b
+    }
+}
+
+/// Texture coordinate on a sphere for the unit normal `n`: u around +y, v from the bottom pole.
+pub fn sphere_uv(n: Vec3) -> Vec2 {
+    let u = 0.5 + (-n.z).atan2(n.x) / std::f32::consts::TAU;
+    let v = 1.0 - n.y.clamp(-1.0, 1.0).acos() / std::f32::consts::PI;
+    Vec2::new(u, v)
+}

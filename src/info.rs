@@ -1,0 +1,76 @@
+//! `glint info`: what a scene holds and which stages a render of it runs, and why.
+
+use std::fmt::Write;
+
+use bevy_ecs::prelude::*;
+
+use crate::accel::scene::SceneGeometry;
+use crate::error::Result;
+use crate::render::Renderer;
+use crate::scene::{Material, Mesh, ParallelogramLight, PointLight, SegmentLight, Sphere};
+
+/// A human-readable report of the scene and its render plan (runs the prepare stage).
+pub fn describe(renderer: &mut Renderer) -> Result<String> {
+    renderer.prepare()?;
+    let w = &mut renderer.world;
+    let count = |w: &mut World, f: fn(&mut World) -> usize| f(w);
+    let meshes = count(w, |w| w.query::<&Mesh>().iter(w).len());
+    let spheres = count(w, |w| w.query::<&Sphere>().iter(w).len());
+    let materials = count(w, |w| w.query::<&Material>().iter(w).len());
+    let points = count(w, |w| w.query::<&PointLight>().iter(w).len());
+    let segments = count(w, |w| w.query::<&SegmentLight>().iter(w).len());
+    let parallelograms = count(w, |w| w.query::<&ParallelogramLight>().iter(w).len());
+    let camera = renderer.camera();
+    let geometry = renderer.world.resource::<SceneGeometry>();
+    let bounds = geometry.bounds();
+    let mut out = String::new();
+    let o = &mut out;
+    let _ = writeln!(o, "scene");
+    if let Some(c) = camera {
+        let _ = writeln!(
+            o,
+            "  camera        {}x{} at {} looking at {}, fov {} deg",
+            c.width, c.height, c.position, c.look_at, c.fov_y_degrees
+        );
+    }
+    let _ = writeln!(
+        o,
+        "  meshes        {meshes} ({} triangles)",
+        geometry.tri_positions.len()
+    );
+    let _ = writeln!(o, "  spheres       {spheres}");
+    let _ = writeln!(o, "  materials     {materials}");
+    let _ = writeln!(
+        o,
+        "  lights        {points} point, {segments} segment, {parallelograms} parallelogram"
+    );
+    if bounds.is_empty() {
+        let _ = writeln!(o, "  bounds        (no geometry)");
+    } else {
+        let _ = writeln!(o, "  bounds        {} .. {}", bounds.min, bounds.max);
+    }
+    let bvh = &geometry.tri_bvh;
+    if !bvh.nodes.is_empty() {
+        let _ = writeln!(
+            o,
+            "  triangle BVH  {} nodes, {} leaves, depth {}",
+            bvh.nodes.len(),
+            bvh.leaf_count(),
+            bvh.depth()
+        );
+    }
+    let _ = writeln!(
+        o,
+        "  samples       {} per pixel",
+        renderer.samples_per_pixel()
+    );
+    let _ = writeln!(o, "plan");
+    for e in &renderer.plan().entries {
+        let mark = if e.runs { "runs   " } else { "skipped" };
+        let _ = writeln!(o, "  {mark} {:<26} {}", e.stage, e.why);
+    }
+    for warning in renderer.warnings() {
+        let _ = writeln!(o, "warning: {warning}");
+    }
+    Ok(out)
+}

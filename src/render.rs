@@ -1,0 +1,248 @@
+//! The render driver: loads a scene into a `World`, runs the schedules, reports.
+
+use std::path::Path;
+use std::time::{Duration, Instant};
+
+use bevy_ecs::prelude::*;
+
+use crate::error::{GlintError, Result};
+use crate::film::Film;
+use crate::sampling::samples_taken;
+use crate::scene::format::SceneFile;
+use crate::scene::{Camera, SceneSource, Settings, read_scene, spawn_scene};
+use crate::schedule::{Prepare, RenderPass, add_render_schedules};
+use crate::trace::StageErrors;
+use crate::trace::plan::RenderPlan;
+use crate::trace::stats::RenderStats;
+use crate::trace::wavefront::PassRegion;
+
+/// Pixels traced per wavefront: bounds the queues' memory for large images.
+pub const REGION_PIXELS: u32 = 1 << 16;
+
+/// Command-line changes to a scene.
+#[derive(Clone, Debug, Default)]
+pub struct Overrides {
+    /// Image width.
+    pub width: Option<u32>,
+    /// Image height.
+    pub height: Option<u32>,
+    /// Random seed.
+    pub seed: Option<u64>,
+    /// `key=value` settings, applied in order.
+    pub set: Vec<(String, String)>,
+}
+
+impl Overrides {
+    /// Applies the overrides to a parsed scene.
+    pub fn apply(&self, file: &mut SceneFile) -> Result<()> {
+        if let Some(w) = self.width {
+            file.camera.width = w;
+        }
+        if let Some(h) = self.height {
+            file.camera.height = h;
+        }
+        if let Some(seed) = self.seed {
+            file.settings.seed = seed;
+        }
+        for (k, v) in &self.set {
+            file.settings
+                .set(k, v)
+                .map_err(|e| GlintError::Usage(format!("--set {e}")))?;
+        }
+        Ok(())
+    }
+}
+
+/// What a finished render did.
+#[derive(Clone, Debug)]
+pub struct RenderSummary {
+    /// Image width.
+    pub width: u32,
+    /// Image height.
+    pub height: u32,
+    /// Samples per pixel taken.
+    pub samples: u32,
+    /// Wall time of the whole render (prepare and passes).
+    pub seconds: f64,
+    /// Statistics of the run.
+    pub stats: RenderStats,
+}
+
+impl std::fmt::Display for RenderSummary {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        let r = &self.stats.rays;
+        write!(
+            f,
+            "{}x{}, {} spp, {:.2} s, rays: {} camera, {} shadow, {} reflection, {} pass-through, {:.2} Mrays/s",
+            self.width,
+            self.height,
+            self.samples,
+            self.seconds,
+            r.camera,
+            r.shadow,
+            r.reflection,
+            r.pass_through,
+            r.total() as f64 / self.seconds.max(1e-9) / 1e6
+        )?;
+        if self.stats.nonfinite_samples > 0 {
+            write!(
+                f,
+                ", {} non-finite samples dropped",
+                self.stats.nonfinite_samples
+            )?;
+        }
+        Ok(())
+    }
+}
+
+/// A scene loaded into a `World` with the render schedules added.
+pub struct Renderer {
+    /// The world: scene entities, settings and render resources.
+    pub world: World,
+    prepared: bool,
+    started: Option<Instant>,
+}
+
+impl Renderer {
+    /// Loads a scene file and applies `overrides`.
+    pub fn from_file(path: &Path, overrides: &Overrides) -> Result<Self> {
+        let mut file = read_scene(path)?;
+        overrides.apply(&mut file)?;
+        Self::from_scene(&file, path)
+    }
+
+    /// Builds the world from a parsed scene; `path` resolves relative paths.
+    pub fn from_scene(file: &SceneFile, path: &Path) -> Result<Self> {
+        let mut world = World::new();
+        spawn_scene(&mut world, file, path)?;
+        Ok(Self::from_world(world))
+    }
+
+    /// Wraps a world that already holds a scene (entities and [`Settings`]).
+    pub fn from_world(mut world: World) -> Self {
+        add_render_schedules(&mut world);
+        world.init_resource::<Settings>();
+        Self {
+            world,
+            prepared: false,
+            started: None,
+        }
+    }
+
+    /// The camera (the first one spawned).
+    pub fn camera(&mut self) -> Option<Camera> {
+        let mut q = self.world.query::<&Camera>();
+        q.iter(&self.world).next().cloned()
+    }
+
+    /// The settings.
+    pub fn settings(&self) -> &Settings {
+        self.world.resource::<Settings>()
+    }
+
+    /// Warnings the loader repaired.
+    pub fn warnings(&self) -> Vec<String> {
+        self.world
+            .get_resource::<SceneSource>()
+            .map(|s| s.warnings.clone())
+            .unwrap_or_default()
+    }
+
+    /// Samples per pixel a full render takes.
+    pub fn samples_per_pixel(&self) -> u32 {
+        let s = self.settings();
+        samples_taken(s.pixel_samples, s.pixel_sampling)
+    }
+
+    fn take_errors(&mut self) -> Result<()> {
+        let mut errors = self.world.resource_mut::<StageErrors>();
+        match errors.0.drain(..).next() {
+            Some(e) => Err(e),
+            None => Ok(()),
+        }
+    }
+
+    /// Runs the [`Prepare`] schedule once (analysis, tables, BVHs).
+    pub fn prepare(&mut self) -> Result<()> {
+        if self.prepared {
+            return Ok(());
+        }
+        self.started.get_or_insert_with(Instant::now);
+        let camera = self
+            .camera()
+            .ok_or_else(|| GlintError::Usage("the scene has no camera".into()))?;
+        self.world
+            .insert_resource(Film::new(camera.width, camera.height));
+        self.world.run_schedule(Prepare);
+        self.prepared = true;
+        self.take_errors()
+    }
+
+    /// Traces sample index `sample` for every pixel, region by region; `progress`
+    /// receives the pixels done after each region.
+    pub fn render_pass(&mut self, sample: u32, progress: &mut dyn FnMut(u64)) -> Result<()> {
+        self.prepare()?;
+        let film = self.world.resource::<Film>();
+        let pixels = film.width * film.height;
+        let mut first = 0;
+        while first < pixels {
+            let count = REGION_PIXELS.min(pixels - first);
+            self.world.insert_resource(PassRegion {
+                sample,
+                first_pixel: first,
+                pixels: count,
+            });
+            self.world.run_schedule(RenderPass);
+            progress(count as u64);
+            first += count;
+        }
+        self.take_errors()
+    }
+
+    /// Renders every sample of every pixel; stops early after a pass if `budget` is spent.
+    pub fn render(
+        &mut self,
+        budget: Option<Duration>,
+        progress: &mut dyn FnMut(u64),
+    ) -> Result<RenderSummary> {
+        self.prepare()?;
+        let start = self.started.unwrap_or_else(Instant::now);
+        let n = self.samples_per_pixel();
+        let mut done = 0;
+        for sample in 0..n {
+            self.render_pass(sample, progress)?;
+            done += 1;
+            if budget.is_some_and(|b| start.elapsed() >= b) {
+                break;
+            }
+        }
+        Ok(self.summary(done, start.elapsed()))
+    }
+
+    /// A summary of the run so far.
+    pub fn summary(&self, samples: u32, elapsed: Duration) -> RenderSummary {
+        let film = self.world.resource::<Film>();
+        RenderSummary {
+            width: film.width,
+            height: film.height,
+            samples,
+            seconds: elapsed.as_secs_f64(),
+            stats: self.world.resource::<RenderStats>().clone(),
+        }
+    }
+
+    /// The film.
+    pub fn film(&self) -> &Film {
+        self.world.resource::<Film>()
+    }
+
+    /// Statistics of the run so far.
+    pub fn stats(&self) -> &RenderStats {
+        self.world.resource::<RenderStats>()
+    }
+
+    /// The plan (valid after [`Renderer::prepare`]).
+    pub fn plan(&self) -> &RenderPlan {
+        self.world.resource::<RenderPlan>()
+    }
+}

@@ -1,0 +1,147 @@
+//! From a hit to a shading point: position with its error bound, normals facing the
+//! ray, texture coordinate; and robust spawning of rays off the surface.
+//!
+//! Offsets follow pbrt's approach (Pharr, Jakob, Humphreys, "Physically Based Rendering",
+//! 3rd ed., 3.9): the hit point carries a conservative bound on its rounding error, and
+//! new rays start just outside that error box along the geometric normal, rounded away
+//! from the surface. The offset therefore scales with the hit point's magnitude and
+//! works at 1e-4 and at 1e6 scene scale alike, unlike a fixed epsilon.
+
+use glam::{Vec2, Vec3};
+
+use crate::accel::Ray;
+use crate::accel::scene::{Hit, PrimKind, SceneGeometry, sphere_uv};
+
+/// Fraction of a shadow ray's length left out at the light end, so that a surface the
+/// light sample sits on does not shadow it.
+pub const SHADOW_EPSILON: f32 = 1e-4;
+
+/// `n * eps / (1 - n * eps)`, pbrt's bound on the relative error of `n` float operations.
+pub const fn gamma(n: i32) -> f32 {
+    let e = f32::EPSILON * 0.5 * n as f32;
+    e / (1.0 - e)
+}
+
+/// A shading point.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Surface {
+    /// Position.
+    pub p: Vec3,
+    /// Conservative bound on the absolute rounding error of each component of `p`.
+    pub p_error: Vec3,
+    /// Geometric normal, turned to face the incoming ray.
+    pub ng: Vec3,
+    /// Shading normal (interpolated or geometric), on the same side as `ng`.
+    pub n: Vec3,
+    /// Texture coordinate.
+    pub uv: Vec2,
+    /// Material index.
+    pub material: u32,
+}
+
+/// Builds the shading point of `hit` on `ray`.
+pub fn surface_at(
+    geometry: &SceneGeometry,
+    ray: &Ray,
+    hit: &Hit,
+    interpolate_normals: bool,
+) -> Surface {
+    let (p, p_error, ng, n, uv, material) = match hit.kind {
+        PrimKind::Triangle => {
+            let i = hit.prim as usize;
+            let [p0, p1, p2] = geometry.tri_positions[i];
+            let b = hit.bary;
+            let p = b.x * p0 + b.y * p1 + b.z * p2;
+            let p_error = gamma(7) * ((b.x * p0).abs() + (b.y * p1).abs() + (b.z * p2).abs());
+            let ng = (p1 - p0).cross(p2 - p0).normalize_or(Vec3::Z);
+            let n = if interpolate_normals {
+                let [n0, n1, n2] = geometry.tri_normals[i];
+                // Clamp so rounding just outside the triangle cannot flip the blend.
+                let w = b.max(Vec3::ZERO);
+                (w.x * n0 + w.y * n1 + w.z * n2).normalize_or(ng)
+            } else {
+                ng
+            };
+            let [t0, t1, t2] = geometry.tri_texcoords[i];
+            let uv = b.x * t0 + b.y * t1 + b.z * t2;
+            (p, p_error, ng, n, uv, geometry.tri_material[i])
+        }
+        PrimKind::Sphere => {
+            let s = &geometry.spheres[hit.prim as usize];
+            let raw = ray.origin + hit.t * ray.dir;
+            // Re-project onto the sphere: this removes most of the error of `o + t d`.
+            let local = (raw - s.center).normalize_or(Vec3::Y);
+            let p = s.center + local * s.radius;
+            let p_error = gamma(5) * ((local * s.radius).abs() + s.center.abs());
+            (
+                p,
+                p_error,
+                local,
+                local,
+                sphere_uv(local),
+                geometry.sphere_material[hit.prim as usize],
+            )
+        }
+    };
+    let ng = if ng.dot(ray.dir) > 0.0 { -ng } else { ng };
+    let n = if n.dot(ng) < 0.0 { -n } else { n };
+    Surface {
+        p,
+        p_error,
+        ng,
+        n,
+        uv,
+        material,
+    }
+}
+
+/// A ray origin just off the surface at `p`, on the side of `ng` that `w` points to.
+pub fn offset_ray_origin(p: Vec3, p_error: Vec3, ng: Vec3, w: Vec3) -> Vec3 {
+    let d = ng.abs().dot(p_error);
+    let offset = if w.dot(ng) < 0.0 { -d * ng } else { d * ng };
+    let mut po = p + offset;
+    // Round away from p so the offset survives the addition's own rounding.
+    for i in 0..3 {
+        if offset[i] > 0.0 {
+            po[i] = po[i].next_up();
+        } else if offset[i] < 0.0 {
+            po[i] = po[i].next_down();
+        }
+    }
+    po
+}
+
+impl Surface {
+    /// A ray leaving the surface in direction `dir`, from the side `dir` points to.
+    pub fn spawn_ray(&self, dir: Vec3) -> Ray {
+        Ray {
+            origin: offset_ray_origin(self.p, self.p_error, self.ng, dir),
+            dir,
+        }
+    }
+
+    /// The reflection ray of `incoming` (SPEC: offset to the side the ray came from).
+    pub fn reflection_ray(&self, incoming: Vec3) -> Ray {
+        let d = incoming.normalize();
+        let r = (d - 2.0 * d.dot(self.n) * self.n).normalize();
+        Ray {
+            origin: offset_ray_origin(self.p, self.p_error, self.ng, self.ng),
+            dir: r,
+        }
+    }
+
+    /// The pass-through ray of `incoming`: same direction, offset forward.
+    pub fn pass_through_ray(&self, incoming: Vec3) -> Ray {
+        self.spawn_ray(incoming)
+    }
+
+    /// A shadow ray from the viewer's side of the surface to `target`; trace it over
+    /// `(0, 1 - SHADOW_EPSILON)`.
+    pub fn shadow_ray_to(&self, target: Vec3) -> Ray {
+        let origin = offset_ray_origin(self.p, self.p_error, self.ng, self.ng);
+        Ray {
+            origin,
+            dir: target - origin,
+        }
+    }
+}

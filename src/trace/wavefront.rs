@@ -1,0 +1,364 @@
+//! The wavefront bounce loop: the recursion of SPEC "Radiance of a camera ray" as
+//! queues of rays carrying throughput weights, processed a depth level at a time.
+//!
+//! Both recursive terms are linear in the recursive result, so weighting works exactly:
+//! with `a = alpha` where the pass-through blend applies (else 1), a hit adds
+//! `w * a * direct`, spawns a reflection ray of weight `w * a * ks` and a pass-through
+//! ray of weight `w * (1 - alpha)`.
+
+use bevy_ecs::prelude::*;
+use glam::Vec3;
+use rayon::prelude::*;
+
+use super::lights::Lights;
+use super::materials::Materials;
+use super::plan::RenderPlan;
+use super::stats::RenderStats;
+use super::surface::{SHADOW_EPSILON, Surface, surface_at};
+use crate::accel::Ray;
+use crate::accel::scene::SceneGeometry;
+use crate::sampling::{Sampler, pixel_sample_offset, samples_taken};
+use crate::scene::{Camera, Settings};
+use crate::shade::{Shading, ShadingInput};
+
+/// Rays per rayon task: large enough to amortise scheduling, small enough to balance.
+const CHUNK: usize = 1024;
+
+/// A ray waiting to be traced, with where its radiance goes.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct QueuedRay {
+    /// The ray.
+    pub ray: Ray,
+    /// Throughput: what one unit of radiance along this ray adds to its sample.
+    pub weight: Vec3,
+    /// Index of the camera sample (within the current region) it belongs to.
+    pub slot: u32,
+    /// Branch id within the sample's ray tree (root 0; children 2k+1, 2k+2).
+    pub path: u32,
+}
+
+/// A shadow ray: `contribution` reaches ray `owner`'s radiance if the path is clear.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct ShadowRay {
+    /// From the shading point to the light sample; traced over `(0, 1 - SHADOW_EPSILON)`.
+    pub ray: Ray,
+    /// Unoccluded contribution, already weighted.
+    pub contribution: Vec3,
+    /// Index of the queued ray whose hit cast it.
+    pub owner: u32,
+}
+
+/// What a pass covers: one sample index over a range of pixels.
+#[derive(Resource, Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct PassRegion {
+    /// Sample index (the pass number).
+    pub sample: u32,
+    /// First pixel (row-major index).
+    pub first_pixel: u32,
+    /// Number of pixels.
+    pub pixels: u32,
+}
+
+/// The queues and buffers of the wavefront in flight.
+#[derive(Resource, Clone, Debug, Default)]
+pub struct Wavefront {
+    /// Depth of the rays in `rays` (camera rays are 0).
+    pub depth: u32,
+    /// Rays of the current depth.
+    pub rays: Vec<QueuedRay>,
+    /// Closest hit of each ray, and its shading point.
+    pub hits: Vec<Option<Surface>>,
+    /// Radiance gathered by each ray at this depth (direct light, background).
+    pub ray_radiance: Vec<Vec3>,
+    /// Shadow rays cast this depth.
+    pub shadow_rays: Vec<ShadowRay>,
+    /// Rays for the next depth.
+    pub next: Vec<QueuedRay>,
+    /// Radiance of each camera sample of the region.
+    pub sample_radiance: Vec<Vec3>,
+}
+
+/// The camera's ray through image-plane position `(x, y)` in pixels (row 0 at the top).
+pub fn camera_ray(camera: &Camera, x: f32, y: f32) -> Ray {
+    let forward = (camera.look_at - camera.position).normalize();
+    let right = forward.cross(camera.up).normalize();
+    let up = right.cross(forward);
+    let tan = (camera.fov_y_degrees.to_radians() * 0.5).tan();
+    let aspect = camera.width as f32 / camera.height as f32;
+    let sx = (2.0 * x / camera.width as f32 - 1.0) * tan * aspect;
+    let sy = (1.0 - 2.0 * y / camera.height as f32) * tan;
+    Ray {
+        origin: camera.position,
+        dir: (forward + sx * right + sy * up).normalize(),
+    }
+}
+
+/// Generates one camera ray per pixel of the region, at its sample offset.
+pub fn generate_camera_samples(
+    settings: Res<Settings>,
+    plan: Res<RenderPlan>,
+    cameras: Query<&Camera>,
+    region: Res<PassRegion>,
+    mut wf: ResMut<Wavefront>,
+    mut stats: ResMut<RenderStats>,
+) {
+    let Some(camera) = cameras.iter().next() else {
+        return;
+    };
+    let sampler = Sampler::new(settings.seed);
+    let n = samples_taken(settings.pixel_samples, settings.pixel_sampling);
+    let (mode, patterns) = (settings.pixel_sampling, plan.pixel_patterns);
+    let width = camera.width;
+    let rays: Vec<QueuedRay> = (0..region.pixels)
+        .into_par_iter()
+        .with_min_len(CHUNK)
+        .map(|slot| {
+            let pixel = region.first_pixel + slot;
+            let offset = if patterns {
+                pixel_sample_offset(&sampler, pixel, region.sample, n, mode)
+            } else {
+                glam::Vec2::splat(0.5)
+            };
+            let (x, y) = ((pixel % width) as f32, (pixel / width) as f32);
+            QueuedRay {
+                ray: camera_ray(camera, x + offset.x, y + offset.y),
+                weight: Vec3::ONE,
+                slot,
+                path: 0,
+            }
+        })
+        .collect();
+    stats.record("generate_camera_samples", rays.len() as u64);
+    stats.rays.camera += rays.len() as u64;
+    wf.depth = 0;
+    wf.sample_radiance = vec![Vec3::ZERO; rays.len()];
+    wf.rays = rays;
+}
+
+/// Finds each ray's closest hit and builds its shading point.
+pub fn intersect_rays(
+    settings: Res<Settings>,
+    geometry: Res<SceneGeometry>,
+    mut wf: ResMut<Wavefront>,
+    mut stats: ResMut<RenderStats>,
+) {
+    let interpolate = settings.normal_interpolation;
+    let hits = wf
+        .rays
+        .par_iter()
+        .with_min_len(CHUNK)
+        .map(|q| {
+            geometry
+                .intersect(&q.ray, f32::INFINITY, &mut ())
+                .map(|h| surface_at(&geometry, &q.ray, &h, interpolate))
+        })
+        .collect();
+    wf.hits = hits;
+    stats.record("intersect_rays", wf.rays.len() as u64);
+}
+
+/// Weight of a hit's own colour in the pass-through blend: alpha where SPEC blends, else 1.
+pub fn blend_alpha(settings: &Settings, alpha: f32, depth: u32) -> f32 {
+    if settings.transparency && alpha != 1.0 && depth < settings.max_depth {
+        alpha
+    } else {
+        1.0
+    }
+}
+
+/// Shades every hit: direct light from every light sample, either added at once
+/// (shadows off) or queued as shadow rays; misses get the background.
+pub fn shade_hits(
+    settings: Res<Settings>,
+    plan: Res<RenderPlan>,
+    lights: Res<Lights>,
+    materials: Res<Materials>,
+    region: Res<PassRegion>,
+    mut wf: ResMut<Wavefront>,
+    mut stats: ResMut<RenderStats>,
+) {
+    let s = &*settings;
+    let sampler = Sampler::new(s.seed);
+    let shading = Shading {
+        enabled: s.shading,
+        model: s.shading_model,
+        gradient: &s.gradient,
+        comparison_gradient: &s.comparison_gradient,
+    };
+    let queue_shadows = plan.shadow_rays;
+    let depth = wf.depth;
+    let results: Vec<(Vec3, Vec<ShadowRay>)> = wf
+        .rays
+        .par_iter()
+        .zip(wf.hits.par_iter())
+        .enumerate()
+        .with_min_len(CHUNK)
+        .map(|(i, (q, hit))| {
+            let Some(surface) = hit else {
+                return (q.weight * s.background, Vec::new());
+            };
+            let m = &materials.list[surface.material as usize];
+            let w = q.weight * blend_alpha(s, m.alpha, depth);
+            let kd = materials.kd_at(surface.material, surface.uv);
+            let v = -q.ray.dir.normalize();
+            let mut direct = Vec3::ZERO;
+            let mut shadows = Vec::new();
+            let key = (region.first_pixel + q.slot, region.sample, depth, q.path);
+            lights.for_each_sample(&sampler, key, s.shadow_samples, |ls| {
+                let Some(l) = (ls.position - surface.p).try_normalize() else {
+                    return;
+                };
+                let c = shading.shade(&ShadingInput {
+                    n: surface.n,
+                    l,
+                    v,
+                    light_color: ls.color,
+                    kd,
+                    ks: m.ks,
+                    shininess: m.shininess,
+                }) * w;
+                if c == Vec3::ZERO {
+                    return;
+                }
+                if queue_shadows {
+                    shadows.push(ShadowRay {
+                        ray: surface.shadow_ray_to(ls.position),
+                        contribution: c,
+                        owner: i as u32,
+                    });
+                } else {
+                    direct += c;
+                }
+            });
+            (direct, shadows)
+        })
+        .collect();
+    let mut shadow_rays = Vec::new();
+    let mut radiance = Vec::with_capacity(results.len());
+    for (direct, shadows) in results {
+        radiance.push(direct);
+        shadow_rays.extend(shadows);
+    }
+    stats.record(
+        "shade_hits",
+        wf.hits.iter().filter(|h| h.is_some()).count() as u64,
+    );
+    wf.ray_radiance = radiance;
+    wf.shadow_rays = shadow_rays;
+}
+
+/// Tests every shadow ray and adds the visible part of its contribution: binary
+/// visibility, or the product of transparent tints when the plan says so.
+pub fn trace_shadow_rays(
+    plan: Res<RenderPlan>,
+    geometry: Res<SceneGeometry>,
+    materials: Res<Materials>,
+    mut wf: ResMut<Wavefront>,
+    mut stats: ResMut<RenderStats>,
+) {
+    let t_max = 1.0 - SHADOW_EPSILON;
+    let transparent = plan.transparent_shadows;
+    let visible: Vec<Vec3> = wf
+        .shadow_rays
+        .par_iter()
+        .with_min_len(CHUNK)
+        .map(|s| {
+            if transparent {
+                s.contribution * geometry.transmittance(&s.ray, t_max, &materials, &mut ())
+            } else if geometry.occluded(&s.ray, t_max, &mut ()) {
+                Vec3::ZERO
+            } else {
+                s.contribution
+            }
+        })
+        .collect();
+    let wf = &mut *wf;
+    for (s, c) in wf.shadow_rays.iter().zip(visible) {
+        wf.ray_radiance[s.owner as usize] += c;
+    }
+    stats.record("trace_shadow_rays", wf.shadow_rays.len() as u64);
+    stats.rays.shadow += wf.shadow_rays.len() as u64;
+}
+
+/// Adds each ray's radiance into its camera sample, in queue order (deterministic).
+pub fn gather_radiance(mut wf: ResMut<Wavefront>) {
+    let wf = &mut *wf;
+    for (q, c) in wf.rays.iter().zip(&wf.ray_radiance) {
+        wf.sample_radiance[q.slot as usize] += *c;
+    }
+}
+
+/// Queues `ks`-weighted reflection rays for the next depth.
+pub fn spawn_reflection_rays(
+    settings: Res<Settings>,
+    materials: Res<Materials>,
+    mut wf: ResMut<Wavefront>,
+    mut stats: ResMut<RenderStats>,
+) {
+    if wf.depth >= settings.max_depth {
+        return;
+    }
+    let depth = wf.depth;
+    let spawned: Vec<QueuedRay> = wf
+        .rays
+        .iter()
+        .zip(&wf.hits)
+        .filter_map(|(q, hit)| {
+            let surface = hit.as_ref()?;
+            let m = &materials.list[surface.material as usize];
+            let weight = q.weight * blend_alpha(&settings, m.alpha, depth) * m.ks;
+            (weight != Vec3::ZERO).then(|| QueuedRay {
+                ray: surface.reflection_ray(q.ray.dir),
+                weight,
+                slot: q.slot,
+                path: q.path.wrapping_mul(2).wrapping_add(1),
+            })
+        })
+        .collect();
+    stats.record("spawn_reflection_rays", spawned.len() as u64);
+    stats.rays.reflection += spawned.len() as u64;
+    wf.next.extend(spawned);
+}
+
+/// Queues `(1 - alpha)`-weighted pass-through rays for the next depth.
+pub fn spawn_pass_through_rays(
+    settings: Res<Settings>,
+    materials: Res<Materials>,
+    mut wf: ResMut<Wavefront>,
+    mut stats: ResMut<RenderStats>,
+) {
+    if wf.depth >= settings.max_depth {
+        return;
+    }
+    let spawned: Vec<QueuedRay> = wf
+        .rays
+        .iter()
+        .zip(&wf.hits)
+        .filter_map(|(q, hit)| {
+            let surface = hit.as_ref()?;
+            let alpha = materials.list[surface.material as usize].alpha;
+            let weight = q.weight * (1.0 - alpha);
+            (alpha != 1.0 && weight != Vec3::ZERO).then(|| QueuedRay {
+                ray: surface.pass_through_ray(q.ray.dir),
+                weight,
+                slot: q.slot,
+                path: q.path.wrapping_mul(2).wrapping_add(2),
+            })
+        })
+        .collect();
+    stats.record("spawn_pass_through_rays", spawned.len() as u64);
+    stats.rays.pass_through += spawned.len() as u64;
+    wf.next.extend(spawned);
+}
+
+/// Makes the next depth's rays current.
+pub fn advance_depth(mut wf: ResMut<Wavefront>) {
+    let wf = &mut *wf;
+    wf.rays = std::mem::take(&mut wf.next);
+    wf.depth += 1;
+}
+
+/// Whether rays remain to be traced.
+pub fn rays_pending(wf: &Wavefront) -> bool {
+    !wf.rays.is_empty()
+}
