@@ -142,7 +142,7 @@ mod tests {
         assert_eq!(g.sample(-1.0), Vec3::new(1.0, 0.0, 0.0));
         assert_eq!(g.sample(0.0), Vec3::splat(0.1));
         assert_eq!(g.sample(1.0), Vec3::new(0.0, 1.0, 0.0));
-        assert!(g.sample(0.5).abs_diff_eq(Vec3::new(0.05, 0.5, 0.05), 1e-6));
+        assert!(g.sample(0.5).abs_diff_eq(Vec3::new(0.05, 0.55, 0.05), 1e-6));
     }
 
     #[test]
