@@ -167,7 +167,7 @@ mod tests {
                 for light in 0..20 {
                     for ls in 0..64 {
                         let d = light_dim(depth, path, light, ls);
-                        assert!(d >= 2 && d % 2 == 0, "{d}");
+                        assert!(d >= 2 && d.is_multiple_of(2), "{d}");
                         // get2 uses d and d + 1: neither may be shared.
                         assert!(seen.insert(d), "duplicate {d}");
                     }
@@ -182,9 +182,9 @@ mod tests {
         let b = light_dim(0, 0, 100_000, 0);
         let c = light_dim(0, 0, 0, 100_000);
         for d in [a, b, c] {
-            assert!(d >= 0x8000_0000 && d % 2 == 0, "{d}");
+            assert!(d >= 0x8000_0000 && d.is_multiple_of(2), "{d}");
         }
         assert!(a != b && b != c && a != c);
-        assert_eq!(light_dim(u32::MAX, u32::MAX, u32::MAX, u32::MAX) % 2, 0);
+        assert_eq!(light_dim(u32::MAX, u32::MAX, u32::MAX, u32::MAX) & 1, 0);
     }
 }

@@ -59,8 +59,8 @@ impl Gradient {
         let Some(first) = c.first() else {
             return Vec3::ZERO;
         };
-        // `!(t > first.0)` also sends NaN to the first colour.
-        if !(t > first.0) {
+        // NaN goes to the first colour.
+        if t.is_nan() || t <= first.0 {
             return first.1;
         }
         let last = c[c.len() - 1];
