@@ -1,1 +1,13 @@
 //! Deterministic sampling: pixel patterns and light samples.
+//!
+//! Every random number is a pure function of (seed, pixel, sample index,
+//! dimension) (SPEC "Multisampling"), so an image does not depend on the
+//! thread count or on the order in which pixels are rendered.
+
+pub mod light;
+pub mod pixel;
+pub mod sampler;
+
+pub use light::{sample_parallelogram_light, sample_segment_light};
+pub use pixel::{pixel_sample_offset, samples_taken};
+pub use sampler::{DIM_PIXEL, Sampler, light_dim};

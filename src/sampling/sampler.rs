@@ -1,0 +1,190 @@
+//! A counter-based random number generator and the named dimensions it is indexed by.
+
+use glam::Vec2;
+
+/// The dimension of the pixel offset; the offset uses dimensions 0 and 1.
+pub const DIM_PIXEL: u32 = 0;
+
+/// The largest `f32` below 1, the upper bound of every value handed out.
+const BELOW_ONE: f32 = 1.0 - f32::EPSILON / 2.0;
+
+/// Field widths of the packed light dimension (see [`light_dim`]).
+const DEPTH_BITS: u32 = 4;
+/// Bits for the path (branch) index.
+const PATH_BITS: u32 = 8;
+/// Bits for the light index.
+const LIGHT_BITS: u32 = 9;
+/// Bits for the light sample index.
+const LIGHT_SAMPLE_BITS: u32 = 9;
+
+/// Counter-based random numbers: every value is a pure function of (seed, pixel, sample index, dimension).
+#[derive(Clone, Copy, Debug)]
+pub struct Sampler {
+    /// The seed (from the settings).
+    pub seed: u64,
+}
+
+/// The splitmix64 finaliser: a bijective 64-bit mixer with full avalanche.
+fn mix64(mut x: u64) -> u64 {
+    x = x.wrapping_add(0x9E37_79B9_7F4A_7C15);
+    x = (x ^ (x >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
+    x = (x ^ (x >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
+    x ^ (x >> 31)
+}
+
+impl Sampler {
+    /// A sampler for the given seed.
+    pub fn new(seed: u64) -> Self {
+        Self { seed }
+    }
+
+    /// The 64-bit hash of (seed, pixel, sample, dim).
+    fn hash(&self, pixel: u32, sample: u32, dim: u32) -> u64 {
+        // Chain the mixer over the inputs: each step is a bijection of the
+        // running state xor-ed with the next input, so nearby counters give
+        // unrelated outputs and no input is lost.
+        let h = mix64(self.seed);
+        let h = mix64(h ^ ((u64::from(pixel) << 32) | u64::from(sample)));
+        mix64(h ^ u64::from(dim))
+    }
+
+    /// A number in [0, 1).
+    pub fn get1(&self, pixel: u32, sample: u32, dim: u32) -> f32 {
+        // 24 bits fill an f32 mantissa exactly: the result is a multiple of
+        // 2^-24 and at most 1 - 2^-24, never 1.0.
+        let bits = (self.hash(pixel, sample, dim) >> 40) as u32;
+        (bits as f32 * (1.0 / 16_777_216.0)).min(BELOW_ONE)
+    }
+
+    /// Two numbers in [0,1)^2 (dimensions dim and dim+1).
+    pub fn get2(&self, pixel: u32, sample: u32, dim: u32) -> Vec2 {
+        Vec2::new(
+            self.get1(pixel, sample, dim),
+            self.get1(pixel, sample, dim.wrapping_add(1)),
+        )
+    }
+}
+
+/// The dimension of one light sample: distinct for distinct inputs in practical ranges, always even and never 0 or 1.
+///
+/// The result is meant for [`Sampler::get2`], which also uses `dim + 1`, so
+/// it is even. Inputs within `depth < 16`, `path < 256`, `light < 512`,
+/// `light_sample < 512` are packed exactly (no collisions at all) into
+/// `[2, 2^31)`; anything larger is hashed into `[2^31, 2^32)`, where
+/// collisions are possible but rare. The sampler hashes the dimension again,
+/// so consecutive dimensions are as independent as any others.
+pub fn light_dim(depth: u32, path: u32, light: u32, light_sample: u32) -> u32 {
+    let fits = depth < (1 << DEPTH_BITS)
+        && path < (1 << PATH_BITS)
+        && light < (1 << LIGHT_BITS)
+        && light_sample < (1 << LIGHT_SAMPLE_BITS);
+    if fits {
+        let packed = (((depth << PATH_BITS | path) << LIGHT_BITS | light) << LIGHT_SAMPLE_BITS)
+            | light_sample;
+        // packed < 2^30, so 2 + 2 * packed < 2^31: even, above the pixel dims.
+        2 + 2 * packed
+    } else {
+        let h = mix64(
+            mix64((u64::from(depth) << 32) | u64::from(path))
+                ^ ((u64::from(light) << 32) | u64::from(light_sample)),
+        );
+        // Top bit set keeps this range apart from the packed one; low bit clear keeps it even.
+        ((h >> 32) as u32 | 0x8000_0000) & !1
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use std::collections::HashSet;
+
+    #[test]
+    fn deterministic() {
+        let a = Sampler::new(7);
+        let b = Sampler::new(7);
+        for i in 0..100 {
+            assert_eq!(a.get1(i, i * 3, i % 5), b.get1(i, i * 3, i % 5));
+            assert_eq!(a.get2(i, 2, 0), b.get2(i, 2, 0));
+        }
+    }
+
+    #[test]
+    fn inputs_change_the_value() {
+        let s = Sampler::new(1);
+        let base = s.get1(10, 20, 30);
+        assert_ne!(base, s.get1(11, 20, 30), "pixel");
+        assert_ne!(base, s.get1(10, 21, 30), "sample");
+        assert_ne!(base, s.get1(10, 20, 31), "dim");
+        assert_ne!(base, Sampler::new(2).get1(10, 20, 30), "seed");
+        let v = s.get2(3, 4, DIM_PIXEL);
+        assert_ne!(v.x, v.y);
+        // Swapping pixel and sample must not give the same number.
+        assert_ne!(s.get1(5, 9, 0), s.get1(9, 5, 0));
+    }
+
+    #[test]
+    fn values_in_unit_interval_and_mean_half() {
+        let s = Sampler::new(42);
+        let mut sum = 0.0f64;
+        let n = 100_000u32;
+        for i in 0..n {
+            let x = s.get1(i / 16, i % 16, 3);
+            assert!((0.0..1.0).contains(&x), "{x}");
+            sum += f64::from(x);
+        }
+        let mean = sum / f64::from(n);
+        // Standard error is 0.289 / sqrt(1e5) = 0.0009; 0.005 is > 5 sigma.
+        assert!((mean - 0.5).abs() < 0.005, "mean {mean}");
+    }
+
+    #[test]
+    fn chi_square_2d_pixel_samples() {
+        let s = Sampler::new(0);
+        let mut bins = [0u32; 64];
+        let n = 100_000u32;
+        for i in 0..n {
+            let p = s.get2(i / 8, i % 8, DIM_PIXEL);
+            let bx = (p.x * 8.0) as usize;
+            let by = (p.y * 8.0) as usize;
+            bins[by * 8 + bx] += 1;
+        }
+        let expected = f64::from(n) / 64.0;
+        let chi2: f64 = bins
+            .iter()
+            .map(|&c| (f64::from(c) - expected).powi(2) / expected)
+            .sum();
+        // 63 degrees of freedom: the critical value at p = 1e-4 is about 113.6.
+        assert!(chi2 < 113.6, "chi2 {chi2}");
+        // And not suspiciously perfect (p = 1e-4 lower tail is about 29).
+        assert!(chi2 > 29.0, "chi2 {chi2}");
+    }
+
+    #[test]
+    fn light_dims_distinct_and_not_pixel() {
+        let mut seen = HashSet::new();
+        for depth in 0..8 {
+            for path in 0..4 {
+                for light in 0..20 {
+                    for ls in 0..64 {
+                        let d = light_dim(depth, path, light, ls);
+                        assert!(d >= 2 && d.is_multiple_of(2), "{d}");
+                        // get2 uses d and d + 1: neither may be shared.
+                        assert!(seen.insert(d), "duplicate {d}");
+                    }
+                }
+            }
+        }
+    }
+
+    #[test]
+    fn light_dims_outside_packed_range() {
+        let a = light_dim(100, 0, 0, 0);
+        let b = light_dim(0, 0, 100_000, 0);
+        let c = light_dim(0, 0, 0, 100_000);
+        for d in [a, b, c] {
+            assert!(d >= 0x8000_0000 && d.is_multiple_of(2), "{d}");
+        }
+        assert!(a != b && b != c && a != c);
+        assert_eq!(light_dim(u32::MAX, u32::MAX, u32::MAX, u32::MAX) & 1, 0);
+    }
+}
