@@ -87,27 +87,37 @@ impl Aabb {
     /// Slab test: the entry t (≥ 0) if the ray meets the box within `[0, t_max]`.
     ///
     /// `inv_dir` is `1 / dir` per component; zero components give ±inf. Where
-    /// the origin lies exactly on a slab plane, `0 * inf` is NaN: `f32::min` and
-    /// `f32::max` return the non-NaN argument, so such a slab is ignored (treated
-    /// as containing the ray) instead of turning the test into a miss. The exit
+    /// the origin lies exactly on a slab plane, `0 * inf` is NaN: the near and
+    /// far planes are chosen by the sign of `inv_dir`, and `f32::min`/`f32::max`
+    /// return the non-NaN argument, so such a bound is ignored (the ray counts
+    /// as inside that slab) instead of turning the test into a miss. The exit
     /// distance is enlarged by `1 + 2 gamma(3)` (Ize 2013) so that rounding never
     /// culls a box the exact ray touches.
     #[inline(always)]
     pub fn intersect_ray(&self, origin: Vec3, inv_dir: Vec3, t_max: f32) -> Option<f32> {
-        let tx0 = (self.min.x - origin.x) * inv_dir.x;
-        let tx1 = (self.max.x - origin.x) * inv_dir.x;
-        let ty0 = (self.min.y - origin.y) * inv_dir.y;
-        let ty1 = (self.max.y - origin.y) * inv_dir.y;
-        let tz0 = (self.min.z - origin.z) * inv_dir.z;
-        let tz1 = (self.max.z - origin.z) * inv_dir.z;
-        // The running value is the *receiver* and the slab value the argument:
-        // f32::min/max drop a NaN in either position, so a NaN slab leaves the
-        // running interval unchanged.
-        let t_near = 0.0f32.max(tx0.min(tx1)).max(ty0.min(ty1)).max(tz0.min(tz1));
-        let t_far = t_max.min(tx0.max(tx1)).min(ty0.max(ty1)).min(tz0.max(tz1));
+        let (near_x, far_x) = slab(self.min.x, self.max.x, origin.x, inv_dir.x);
+        let (near_y, far_y) = slab(self.min.y, self.max.y, origin.y, inv_dir.y);
+        let (near_z, far_z) = slab(self.min.z, self.max.z, origin.z, inv_dir.z);
+        // f32::max/min return the non-NaN argument, so a NaN slab bound
+        // leaves the running interval unchanged.
+        let t_near = 0.0f32.max(near_x).max(near_y).max(near_z);
+        let t_far = t_max.min(far_x).min(far_y).min(far_z);
         let t_far = t_far * (1.0 + 2.0 * gamma(3));
         if t_near <= t_far { Some(t_near) } else { None }
     }
+}
+
+/// Entry and exit distances of one slab, choosing the near plane by the sign
+/// of the inverse direction (not by `min(t0, t1)`, which would turn a
+/// `0 * inf = NaN` bound into the other bound, ±inf, and wrongly miss).
+#[inline(always)]
+fn slab(min: f32, max: f32, origin: f32, inv_dir: f32) -> (f32, f32) {
+    let (near, far) = if inv_dir.is_sign_negative() {
+        (max, min)
+    } else {
+        (min, max)
+    };
+    ((near - origin) * inv_dir, (far - origin) * inv_dir)
 }
 
 #[cfg(test)]

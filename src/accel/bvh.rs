@@ -231,3 +231,200 @@ impl Bvh {
         self.nodes.first().map_or(Aabb::EMPTY, |n| n.bounds())
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::accel::test_util::Lcg;
+    use glam::vec3;
+
+    /// Boxes of `n` random small triangles in [-5, 5]³.
+    pub(crate) fn random_tri_bounds(n: usize, seed: u64) -> Vec<Aabb> {
+        let mut rng = Lcg(seed);
+        (0..n)
+            .map(|_| {
+                let c = rng.vec() * 10.0 - Vec3::splat(5.0);
+                Aabb::from_points(&[c, c + rng.dir() * 0.3, c + rng.dir() * 0.3])
+            })
+            .collect()
+    }
+
+    const METHODS: [SplitMethod; 2] = [SplitMethod::SahBinned, SplitMethod::Median];
+
+    #[test]
+    fn empty_input() {
+        for m in METHODS {
+            let b = Bvh::build(&[], m);
+            assert!(b.nodes.is_empty() && b.prim_indices.is_empty());
+            assert_eq!(b.validate(&[]), Ok(()));
+            assert_eq!((b.depth(), b.leaf_count()), (0, 0));
+            assert_eq!(b.bounds(), Aabb::EMPTY);
+        }
+        assert!(Bvh::single_leaf(&[]).nodes.is_empty());
+    }
+
+    #[test]
+    fn one_prim() {
+        let bounds = [Aabb::new(Vec3::ZERO, Vec3::ONE)];
+        for m in METHODS {
+            let b = Bvh::build(&bounds, m);
+            assert_eq!(b.validate(&bounds), Ok(()));
+            assert_eq!(b.nodes, vec![BvhNode::leaf(bounds[0], 0, 1)]);
+            assert_eq!((b.depth(), b.leaf_count()), (1, 1));
+            assert_eq!(b.bounds(), bounds[0]);
+        }
+    }
+
+    #[test]
+    fn all_prims_at_one_point_make_one_leaf() {
+        let p = vec3(1.5, -2.0, 0.25);
+        let bounds = vec![Aabb::from_points(&[p]); 1000];
+        for m in METHODS {
+            let b = Bvh::build(&bounds, m);
+            assert_eq!(b.validate(&bounds), Ok(()));
+            assert_eq!(b.nodes.len(), 1);
+            assert_eq!(b.nodes[0].count, 1000);
+        }
+    }
+
+    #[test]
+    fn collinear_and_flat_input() {
+        // Point boxes on a line: every node box has zero area.
+        let bounds: Vec<Aabb> = (0..500)
+            .map(|i| Aabb::from_points(&[vec3(i as f32 * 0.37, 0.0, 0.0)]))
+            .collect();
+        for m in METHODS {
+            let b = Bvh::build(&bounds, m);
+            assert_eq!(b.validate(&bounds), Ok(()));
+            assert!(b.nodes.iter().all(|n| n.count <= 8));
+        }
+    }
+
+    #[test]
+    fn random_triangles_validate() {
+        for n in [2, 5, 9, 1000, 20_000] {
+            let bounds = random_tri_bounds(n, n as u64);
+            for m in METHODS {
+                let b = Bvh::build(&bounds, m);
+                assert_eq!(b.validate(&bounds), Ok(()), "{m:?} n={n}");
+                assert!(b.nodes.iter().all(|x| x.count <= 8), "{m:?} leaf too large");
+                assert!(b.depth() < MAX_DEPTH);
+                let sum: u32 = b.nodes.iter().map(|x| x.count).sum();
+                assert_eq!(sum as usize, n);
+            }
+            let s = Bvh::single_leaf(&bounds);
+            assert_eq!(s.validate(&bounds), Ok(()));
+            assert_eq!((s.depth(), s.leaf_count()), (1, 1));
+        }
+    }
+
+    #[test]
+    fn median_shape_is_analytic() {
+        // 16 boxes along x: median halves down to leaves of 4, a full tree.
+        let bounds: Vec<Aabb> = (0..16)
+            .map(|i| Aabb::from_points(&[vec3(i as f32, 0.0, 0.0), vec3(i as f32 + 0.5, 1.0, 1.0)]))
+            .collect();
+        let b = Bvh::build(&bounds, SplitMethod::Median);
+        assert_eq!(b.validate(&bounds), Ok(()));
+        assert_eq!((b.nodes.len(), b.depth(), b.leaf_count()), (7, 3, 4));
+        // Depth-first: root, left, left-left, left-right, right, ...
+        assert_eq!(b.nodes[0].offset, 4);
+        assert_eq!(b.nodes[1].offset, 3);
+        assert_eq!(
+            b.nodes[0].bounds(),
+            Aabb::new(Vec3::ZERO, vec3(15.5, 1.0, 1.0))
+        );
+        // The first leaf holds the four smallest x.
+        let mut first: Vec<u32> = b.prim_indices[0..4].to_vec();
+        first.sort();
+        assert_eq!(first, vec![0, 1, 2, 3]);
+    }
+
+    #[test]
+    fn sah_separates_clusters() {
+        // Two tight clusters far apart: the SAH root split separates them.
+        let mut rng = Lcg(9);
+        let mut bounds = Vec::new();
+        for k in 0..2 {
+            for _ in 0..100 {
+                let c = rng.vec() + Vec3::splat(k as f32 * 100.0);
+                bounds.push(Aabb::new(c, c + Vec3::splat(0.01)));
+            }
+        }
+        let b = Bvh::build(&bounds, SplitMethod::SahBinned);
+        assert_eq!(b.validate(&bounds), Ok(()));
+        let left = b.nodes[1].bounds();
+        let right = b.nodes[b.nodes[0].offset as usize].bounds();
+        assert!(left.max.x < 2.0 || right.max.x < 2.0);
+        assert!(left.min.x > 90.0 || right.min.x > 90.0);
+    }
+
+    #[test]
+    fn build_is_deterministic_across_thread_counts() {
+        let bounds = random_tri_bounds(30_000, 1);
+        for m in METHODS {
+            let one = rayon::ThreadPoolBuilder::new()
+                .num_threads(1)
+                .build()
+                .unwrap()
+                .install(|| Bvh::build(&bounds, m));
+            let many = rayon::ThreadPoolBuilder::new()
+                .num_threads(4)
+                .build()
+                .unwrap()
+                .install(|| Bvh::build(&bounds, m));
+            assert_eq!(one.nodes, many.nodes);
+            assert_eq!(one.prim_indices, many.prim_indices);
+        }
+    }
+
+    #[test]
+    fn validate_reports_violations() {
+        let bounds = random_tri_bounds(200, 4);
+        let good = Bvh::build(&bounds, SplitMethod::SahBinned);
+        assert_eq!(good.validate(&bounds), Ok(()));
+        let leaf = good.nodes.iter().position(|n| n.is_leaf()).unwrap();
+        let interior = 0;
+
+        let mut b = good.clone();
+        b.prim_indices[1] = b.prim_indices[0];
+        assert!(b.validate(&bounds).unwrap_err().contains("twice"));
+
+        let mut b = good.clone();
+        b.prim_indices[0] = 999;
+        assert!(b.validate(&bounds).unwrap_err().contains("out of range"));
+
+        let mut b = good.clone();
+        b.nodes[leaf].max[0] -= 1.0;
+        assert!(b.validate(&bounds).is_err());
+
+        let mut b = good.clone();
+        b.nodes[interior].min[1] += 0.5;
+        assert!(
+            b.validate(&bounds)
+                .unwrap_err()
+                .contains("not inside its parent")
+        );
+
+        let mut b = good.clone();
+        b.nodes[interior].offset = b.nodes.len() as u32;
+        assert!(b.validate(&bounds).is_err());
+
+        let mut b = good.clone();
+        let second = b.nodes[0].offset as usize;
+        b.nodes.swap(1, second);
+        assert!(b.validate(&bounds).is_err());
+
+        let mut b = good.clone();
+        b.nodes.push(BvhNode::leaf(bounds[0], 0, 1));
+        assert!(b.validate(&bounds).unwrap_err().contains("unreachable"));
+
+        // An empty leaf is an interior node pointing nowhere sensible.
+        let mut b = good.clone();
+        let last = b.nodes.len() - 1;
+        b.nodes[last].count = 0;
+        assert!(b.validate(&bounds).is_err());
+
+        assert!(good.validate(&bounds[1..]).is_err());
+    }
+}

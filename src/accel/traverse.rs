@@ -180,3 +180,162 @@ impl Bvh {
         false
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::accel::test_util::Lcg;
+    use crate::accel::{Aabb, RayShear, SplitMethod, intersect_triangle_sheared};
+    use glam::{Vec3, vec3};
+
+    type Tri = [Vec3; 3];
+
+    fn random_tris(n: usize, seed: u64) -> Vec<Tri> {
+        let mut rng = Lcg(seed);
+        (0..n)
+            .map(|_| {
+                let c = rng.vec() * 10.0 - Vec3::splat(5.0);
+                [c, c + rng.dir() * 0.5, c + rng.dir() * 0.5]
+            })
+            .collect()
+    }
+
+    fn tri_bounds(tris: &[Tri]) -> Vec<Aabb> {
+        tris.iter().map(|t| Aabb::from_points(t)).collect()
+    }
+
+    fn random_rays(n: usize, seed: u64) -> Vec<(Ray, f32)> {
+        let mut rng = Lcg(seed);
+        (0..n)
+            .map(|i| {
+                let o = rng.vec() * 14.0 - Vec3::splat(7.0);
+                let mut d = rng.dir();
+                // Some axis-aligned directions, with zero components.
+                if i % 10 == 0 {
+                    d = Vec3::ZERO;
+                    d[i / 10 % 3] = if i % 20 == 0 { 1.0 } else { -1.0 };
+                }
+                let t_max = if i % 3 == 0 { 4.0 } else { f32::INFINITY };
+                // Non-unit lengths too.
+                (Ray::new(o, d * (0.5 + rng.next_f32())), t_max)
+            })
+            .collect()
+    }
+
+    fn closest(bvh: &Bvh, tris: &[Tri], ray: &Ray, t_max: f32) -> Option<(u32, f32)> {
+        let s = RayShear::new(ray);
+        bvh.closest_hit(ray, t_max, &mut (), |p, t| {
+            let [a, b, c] = tris[p as usize];
+            intersect_triangle_sheared(&s, ray.origin, a, b, c, t).map(|h| h.t)
+        })
+    }
+
+    #[test]
+    fn empty_bvh_never_hits() {
+        let b = Bvh::default();
+        let r = Ray::new(Vec3::ZERO, Vec3::X);
+        assert_eq!(
+            b.closest_hit(&r, f32::INFINITY, &mut (), |_, _| Some(1.0)),
+            None
+        );
+        assert!(!b.any_hit(&r, f32::INFINITY, &mut (), |_| true));
+    }
+
+    #[test]
+    fn closest_hit_matches_brute_force() {
+        let tris = random_tris(3000, 21);
+        let bounds = tri_bounds(&tris);
+        let brute = Bvh::single_leaf(&bounds);
+        for m in [SplitMethod::SahBinned, SplitMethod::Median] {
+            let bvh = Bvh::build(&bounds, m);
+            assert_eq!(bvh.validate(&bounds), Ok(()));
+            let mut hits = 0;
+            for (ray, t_max) in random_rays(5000, 8) {
+                let expect = closest(&brute, &tris, &ray, t_max);
+                let got = closest(&bvh, &tris, &ray, t_max);
+                assert_eq!(got, expect, "{m:?} {ray:?}");
+                hits += got.is_some() as u32;
+            }
+            // The comparison is meaningful only if many rays hit.
+            assert!(hits > 1000, "only {hits} hits");
+        }
+    }
+
+    #[test]
+    fn any_hit_agrees_with_closest_hit() {
+        let tris = random_tris(2000, 5);
+        let bounds = tri_bounds(&tris);
+        let bvh = Bvh::build(&bounds, SplitMethod::SahBinned);
+        for (ray, t_max) in random_rays(5000, 13) {
+            let s = RayShear::new(&ray);
+            let test = |p: u32| {
+                let [a, b, c] = tris[p as usize];
+                intersect_triangle_sheared(&s, ray.origin, a, b, c, t_max).is_some()
+            };
+            let occluded = bvh.any_hit(&ray, t_max, &mut (), test);
+            assert_eq!(occluded, closest(&bvh, &tris, &ray, t_max).is_some());
+
+            // Without stopping, every hit primitive is visited exactly once.
+            let mut seen = Vec::new();
+            let stopped = bvh.any_hit(&ray, t_max, &mut (), |p| {
+                if test(p) {
+                    seen.push(p);
+                }
+                false
+            });
+            assert!(!stopped);
+            seen.sort();
+            let all: Vec<u32> = (0..tris.len() as u32).filter(|&p| test(p)).collect();
+            assert_eq!(seen, all);
+        }
+    }
+
+    #[test]
+    fn stats_count_work() {
+        let tris = random_tris(100, 2);
+        let bounds = tri_bounds(&tris);
+        let ray = Ray::new(Vec3::splat(-10.0), Vec3::ONE);
+        // Brute force: the root box is entered once and every triangle tested.
+        let mut st = TraversalStats::default();
+        Bvh::single_leaf(&bounds).closest_hit(&ray, f32::INFINITY, &mut st, |_, _| None);
+        assert_eq!(
+            st,
+            TraversalStats {
+                nodes_visited: 1,
+                prims_tested: 100
+            }
+        );
+        // A ray missing the scene visits nothing.
+        let mut st = TraversalStats::default();
+        let away = Ray::new(Vec3::splat(-10.0), -Vec3::ONE);
+        let bvh = Bvh::build(&bounds, SplitMethod::SahBinned);
+        bvh.closest_hit(&away, f32::INFINITY, &mut st, |_, _| None);
+        assert_eq!(st, TraversalStats::default());
+        // The BVH tests far fewer triangles than brute force on a hitting ray.
+        let mut st = TraversalStats::default();
+        let r = Ray::new(vec3(0.0, 0.0, -10.0), Vec3::Z);
+        bvh.any_hit(&r, f32::INFINITY, &mut st, |_| false);
+        assert!(st.nodes_visited >= 1 && st.prims_tested < 100, "{st:?}");
+    }
+
+    #[test]
+    fn visitor_sees_depths_from_root() {
+        struct Depths(Vec<(u32, u32)>);
+        impl TraversalVisitor for Depths {
+            fn visit_node(&mut self, node: u32, depth: u32) {
+                self.0.push((node, depth));
+            }
+        }
+        let tris = random_tris(500, 3);
+        let bounds = tri_bounds(&tris);
+        let bvh = Bvh::build(&bounds, SplitMethod::SahBinned);
+        let ray = Ray::new(vec3(-8.0, 0.1, 0.2), Vec3::X);
+        let mut v = Depths(Vec::new());
+        bvh.closest_hit(&ray, f32::INFINITY, &mut v, |_, _| None);
+        assert_eq!(v.0[0], (0, 0));
+        // Node 1 (root's first child) is always at depth 1 if visited.
+        assert!(v.0.iter().all(|&(n, d)| n != 1 || d == 1));
+        assert!(v.0.iter().all(|&(_, d)| d < bvh.depth()));
+        assert!(v.0.len() > 3);
+    }
+}

@@ -343,9 +343,11 @@ mod tests {
         pts
     }
 
-    fn check_closed(mesh: &Mesh, centre: Vec3, seed: u64) {
+    fn check_closed(mesh: &Mesh, centre: Vec3, seed: u64, reps: usize) {
         let mut rng = Lcg(seed);
-        let pts = edge_and_vertex_points(mesh, &mut rng);
+        let pts: Vec<Vec3> = (0..reps)
+            .flat_map(|_| edge_and_vertex_points(mesh, &mut rng))
+            .collect();
         // From outside, along the outward radial line through the point: the
         // ray crosses the surface transversally there, so it must hit.
         let outside: Vec<Ray> = pts
@@ -381,7 +383,7 @@ mod tests {
         for v in &mut m.verts {
             *v = *v * 1.37 + off;
         }
-        check_closed(&m, off, 11);
+        check_closed(&m, off, 11, 1);
     }
 
     #[test]
@@ -403,6 +405,6 @@ mod tests {
         }
         assert!(rays.len() > 10000);
         assert_eq!(misses(&m, &rays), 0);
-        check_closed(&m, centre, 17);
+        check_closed(&m, centre, 17, 50);
     }
 }
