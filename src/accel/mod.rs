@@ -1,1 +1,53 @@
 //! Acceleration structures and ray/primitive intersection.
+//!
+//! - [`aabb`]: axis-aligned boxes and the robust slab test (Ize 2013).
+//! - [`triangle`]: watertight ray/triangle intersection (Woop, Benthin, Wald 2013).
+//! - [`sphere`]: precise ray/sphere intersection (Haines et al., Ray Tracing Gems ch. 7).
+//! - [`bvh`] and [`build`]: a flat depth-first BVH with binned-SAH and median builders.
+//! - [`traverse`]: closest-hit and any-hit traversal of that BVH.
+
+use glam::Vec3;
+
+pub mod aabb;
+pub mod build;
+pub mod bvh;
+pub mod sphere;
+pub mod traverse;
+pub mod triangle;
+
+#[cfg(test)]
+mod test_util;
+
+pub use aabb::Aabb;
+pub use bvh::{Bvh, BvhNode, SplitMethod};
+pub use sphere::intersect_sphere;
+pub use traverse::{TraversalStats, TraversalVisitor};
+pub use triangle::{RayShear, TriangleHit, intersect_triangle, intersect_triangle_sheared};
+
+/// A ray; `dir` need not be unit length (t is in units of `dir`).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Ray {
+    /// Where the ray starts (t = 0).
+    pub origin: Vec3,
+    /// Direction; the point at parameter t is `origin + t * dir`.
+    pub dir: Vec3,
+}
+
+impl Ray {
+    /// Creates a ray from an origin and a direction.
+    pub fn new(origin: Vec3, dir: Vec3) -> Ray {
+        Ray { origin, dir }
+    }
+
+    /// The point at parameter `t`.
+    pub fn at(&self, t: f32) -> Vec3 {
+        self.origin + t * self.dir
+    }
+}
+
+/// Bound on the relative rounding error of `n` chained f32 operations (PBRT's gamma(n)).
+pub const fn gamma(n: u32) -> f32 {
+    // Unit roundoff is half of f32::EPSILON (round-to-nearest).
+    let u = f32::EPSILON * 0.5;
+    (n as f32 * u) / (1.0 - n as f32 * u)
+}

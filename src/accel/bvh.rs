@@ -1,0 +1,430 @@
+//! A flat bounding volume hierarchy over axis-aligned boxes, laid out depth
+//! first in 32-byte nodes, as in Pharr, Jakob and Humphreys, *Physically
+//! Based Rendering* (3rd ed.), §4.3 "Bounding Volume Hierarchies"
+//! (`LinearBVHNode`). The builders live in [`super::build`], traversal in
+//! [`super::traverse`].
+
+use glam::Vec3;
+
+use super::Aabb;
+use super::build;
+
+/// How the builder chooses split planes.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum SplitMethod {
+    /// Binned surface area heuristic (Wald 2007).
+    #[default]
+    SahBinned,
+    /// Object median along the widest centroid axis.
+    Median,
+}
+
+/// 32-byte node, depth-first: an interior node's first child is at index+1, its second at `offset`; a leaf holds prim_indices[offset..offset+count].
+#[derive(Clone, Copy, Debug, PartialEq)]
+#[repr(C)]
+pub struct BvhNode {
+    /// Box minimum corner.
+    pub min: [f32; 3],
+    /// Interior: index of the second child. Leaf: first entry in `prim_indices`.
+    pub offset: u32,
+    /// Box maximum corner.
+    pub max: [f32; 3],
+    /// Number of primitives; 0 marks an interior node.
+    pub count: u32,
+}
+
+impl BvhNode {
+    /// The node's bounding box.
+    #[inline(always)]
+    pub fn bounds(&self) -> Aabb {
+        Aabb {
+            min: Vec3::from_array(self.min),
+            max: Vec3::from_array(self.max),
+        }
+    }
+
+    /// True for a leaf (`count > 0`).
+    #[inline(always)]
+    pub fn is_leaf(&self) -> bool {
+        self.count > 0
+    }
+
+    /// A leaf over `prim_indices[offset..offset+count]`.
+    pub fn leaf(bounds: Aabb, offset: u32, count: u32) -> BvhNode {
+        BvhNode {
+            min: bounds.min.to_array(),
+            offset,
+            max: bounds.max.to_array(),
+            count,
+        }
+    }
+
+    /// An interior node whose second child is at `second_child`.
+    pub fn interior(bounds: Aabb, second_child: u32) -> BvhNode {
+        BvhNode {
+            min: bounds.min.to_array(),
+            offset: second_child,
+            max: bounds.max.to_array(),
+            count: 0,
+        }
+    }
+}
+
+/// A BVH: depth-first nodes (root at 0) and the primitive order the leaves refer to.
+#[derive(Clone, Debug, Default)]
+pub struct Bvh {
+    /// Nodes in depth-first order; empty for no primitives.
+    pub nodes: Vec<BvhNode>,
+    /// Primitive indices (into the builder's `bounds`), grouped by leaf.
+    pub prim_indices: Vec<u32>,
+}
+
+/// Deepest tree the fixed traversal stack supports (the builder stays within it).
+pub const MAX_DEPTH: u32 = 64;
+
+impl Bvh {
+    /// Builds over primitive bounds (centroids = bounds' centres). Empty input → no nodes.
+    pub fn build(bounds: &[Aabb], split: SplitMethod) -> Bvh {
+        build::build(bounds, split)
+    }
+
+    /// One leaf holding every primitive: the "no acceleration" mode, traversed by the same code.
+    pub fn single_leaf(bounds: &[Aabb]) -> Bvh {
+        if bounds.is_empty() {
+            return Bvh::default();
+        }
+        let b = bounds.iter().fold(Aabb::EMPTY, |acc, b| acc.union(*b));
+        Bvh {
+            nodes: vec![BvhNode::leaf(b, 0, bounds.len() as u32)],
+            prim_indices: (0..bounds.len() as u32).collect(),
+        }
+    }
+
+    /// Checks every structural invariant; Err names the first violation.
+    ///
+    /// Invariants: `prim_indices` is a permutation of `0..bounds.len()`; nodes
+    /// are in depth-first (pre-)order, so a walk from the root meets them as
+    /// 0, 1, 2, … and reaches every node once; an interior node's second child
+    /// lies after its first; leaves are non-empty and cover `prim_indices` in
+    /// order without gaps or overlap; every node box contains its children's
+    /// boxes and a leaf box contains its primitives' boxes; depth ≤ [`MAX_DEPTH`].
+    pub fn validate(&self, bounds: &[Aabb]) -> Result<(), String> {
+        if self.nodes.is_empty() {
+            if bounds.is_empty() && self.prim_indices.is_empty() {
+                return Ok(());
+            }
+            return Err(format!(
+                "no nodes but {} primitives and {} indices",
+                bounds.len(),
+                self.prim_indices.len()
+            ));
+        }
+        if self.prim_indices.len() != bounds.len() {
+            return Err(format!(
+                "{} prim indices for {} primitives",
+                self.prim_indices.len(),
+                bounds.len()
+            ));
+        }
+        let mut seen = vec![false; bounds.len()];
+        for &p in &self.prim_indices {
+            let Some(s) = seen.get_mut(p as usize) else {
+                return Err(format!("prim index {p} out of range"));
+            };
+            if *s {
+                return Err(format!("prim index {p} appears twice"));
+            }
+            *s = true;
+        }
+
+        let n = self.nodes.len() as u32;
+        let mut next_node = 0u32;
+        let mut next_prim = 0u32;
+        // (node, parent, depth)
+        let mut stack: Vec<(u32, Option<u32>, u32)> = vec![(0, None, 1)];
+        while let Some((i, parent, depth)) = stack.pop() {
+            if i != next_node {
+                return Err(format!(
+                    "node {i} visited where depth-first order expects {next_node}"
+                ));
+            }
+            next_node += 1;
+            if depth > MAX_DEPTH {
+                return Err(format!("node {i} at depth {depth} > {MAX_DEPTH}"));
+            }
+            let node = &self.nodes[i as usize];
+            let b = node.bounds();
+            if let Some(p) = parent {
+                if !self.nodes[p as usize].bounds().contains_box(&b) {
+                    return Err(format!("node {i} box is not inside its parent {p}"));
+                }
+            }
+            if node.is_leaf() {
+                if node.offset != next_prim {
+                    return Err(format!(
+                        "leaf {i} starts at prim {} instead of {next_prim}",
+                        node.offset
+                    ));
+                }
+                let end = node.offset as u64 + node.count as u64;
+                if end > self.prim_indices.len() as u64 {
+                    return Err(format!("leaf {i} range ends at {end}, past the indices"));
+                }
+                for k in node.offset..node.offset + node.count {
+                    let p = self.prim_indices[k as usize];
+                    if !b.contains_box(&bounds[p as usize]) {
+                        return Err(format!("leaf {i} box does not contain prim {p}"));
+                    }
+                }
+                next_prim += node.count;
+            } else {
+                if i + 1 >= n || node.offset <= i + 1 || node.offset >= n {
+                    return Err(format!(
+                        "interior node {i} has child offsets {} and {} outside {}..{n}",
+                        i + 1,
+                        node.offset,
+                        i + 2
+                    ));
+                }
+                // Pushed second so the first child is visited next.
+                stack.push((node.offset, Some(i), depth + 1));
+                stack.push((i + 1, Some(i), depth + 1));
+            }
+        }
+        if next_node != n {
+            return Err(format!("{} of {n} nodes are unreachable", n - next_node));
+        }
+        if next_prim as usize != self.prim_indices.len() {
+            return Err(format!(
+                "leaves cover {next_prim} of {} prim indices",
+                self.prim_indices.len()
+            ));
+        }
+        Ok(())
+    }
+
+    /// Number of levels (root alone = 1, empty = 0).
+    pub fn depth(&self) -> u32 {
+        if self.nodes.is_empty() {
+            return 0;
+        }
+        let mut max = 0;
+        let mut stack = vec![(0u32, 1u32)];
+        while let Some((i, d)) = stack.pop() {
+            max = max.max(d);
+            let node = &self.nodes[i as usize];
+            if !node.is_leaf() {
+                stack.push((i + 1, d + 1));
+                stack.push((node.offset, d + 1));
+            }
+        }
+        max
+    }
+
+    /// Number of leaf nodes.
+    pub fn leaf_count(&self) -> usize {
+        self.nodes.iter().filter(|n| n.is_leaf()).count()
+    }
+
+    /// Bounds of everything (`Aabb::EMPTY` when there are no nodes).
+    pub fn bounds(&self) -> Aabb {
+        self.nodes.first().map_or(Aabb::EMPTY, |n| n.bounds())
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::accel::test_util::Lcg;
+    use glam::vec3;
+
+    /// Boxes of `n` random small triangles in [-5, 5]³.
+    pub(crate) fn random_tri_bounds(n: usize, seed: u64) -> Vec<Aabb> {
+        let mut rng = Lcg(seed);
+        (0..n)
+            .map(|_| {
+                let c = rng.vec() * 10.0 - Vec3::splat(5.0);
+                Aabb::from_points(&[c, c + rng.dir() * 0.3, c + rng.dir() * 0.3])
+            })
+            .collect()
+    }
+
+    const METHODS: [SplitMethod; 2] = [SplitMethod::SahBinned, SplitMethod::Median];
+
+    #[test]
+    fn empty_input() {
+        for m in METHODS {
+            let b = Bvh::build(&[], m);
+            assert!(b.nodes.is_empty() && b.prim_indices.is_empty());
+            assert_eq!(b.validate(&[]), Ok(()));
+            assert_eq!((b.depth(), b.leaf_count()), (0, 0));
+            assert_eq!(b.bounds(), Aabb::EMPTY);
+        }
+        assert!(Bvh::single_leaf(&[]).nodes.is_empty());
+    }
+
+    #[test]
+    fn one_prim() {
+        let bounds = [Aabb::new(Vec3::ZERO, Vec3::ONE)];
+        for m in METHODS {
+            let b = Bvh::build(&bounds, m);
+            assert_eq!(b.validate(&bounds), Ok(()));
+            assert_eq!(b.nodes, vec![BvhNode::leaf(bounds[0], 0, 1)]);
+            assert_eq!((b.depth(), b.leaf_count()), (1, 1));
+            assert_eq!(b.bounds(), bounds[0]);
+        }
+    }
+
+    #[test]
+    fn all_prims_at_one_point_make_one_leaf() {
+        let p = vec3(1.5, -2.0, 0.25);
+        let bounds = vec![Aabb::from_points(&[p]); 1000];
+        for m in METHODS {
+            let b = Bvh::build(&bounds, m);
+            assert_eq!(b.validate(&bounds), Ok(()));
+            assert_eq!(b.nodes.len(), 1);
+            assert_eq!(b.nodes[0].count, 1000);
+        }
+    }
+
+    #[test]
+    fn collinear_and_flat_input() {
+        // Point boxes on a line: every node box has zero area.
+        let bounds: Vec<Aabb> = (0..500)
+            .map(|i| Aabb::from_points(&[vec3(i as f32 * 0.37, 0.0, 0.0)]))
+            .collect();
+        for m in METHODS {
+            let b = Bvh::build(&bounds, m);
+            assert_eq!(b.validate(&bounds), Ok(()));
+            assert!(b.nodes.iter().all(|n| n.count <= 8));
+        }
+    }
+
+    #[test]
+    fn random_triangles_validate() {
+        for n in [2, 5, 9, 1000, 20_000] {
+            let bounds = random_tri_bounds(n, n as u64);
+            for m in METHODS {
+                let b = Bvh::build(&bounds, m);
+                assert_eq!(b.validate(&bounds), Ok(()), "{m:?} n={n}");
+                assert!(b.nodes.iter().all(|x| x.count <= 8), "{m:?} leaf too large");
+                assert!(b.depth() < MAX_DEPTH);
+                let sum: u32 = b.nodes.iter().map(|x| x.count).sum();
+                assert_eq!(sum as usize, n);
+            }
+            let s = Bvh::single_leaf(&bounds);
+            assert_eq!(s.validate(&bounds), Ok(()));
+            assert_eq!((s.depth(), s.leaf_count()), (1, 1));
+        }
+    }
+
+    #[test]
+    fn median_shape_is_analytic() {
+        // 16 boxes along x: median halves down to leaves of 4, a full tree.
+        let bounds: Vec<Aabb> = (0..16)
+            .map(|i| Aabb::from_points(&[vec3(i as f32, 0.0, 0.0), vec3(i as f32 + 0.5, 1.0, 1.0)]))
+            .collect();
+        let b = Bvh::build(&bounds, SplitMethod::Median);
+        assert_eq!(b.validate(&bounds), Ok(()));
+        assert_eq!((b.nodes.len(), b.depth(), b.leaf_count()), (7, 3, 4));
+        // Depth-first: root, left, left-left, left-right, right, ...
+        assert_eq!(b.nodes[0].offset, 4);
+        assert_eq!(b.nodes[1].offset, 3);
+        assert_eq!(
+            b.nodes[0].bounds(),
+            Aabb::new(Vec3::ZERO, vec3(15.5, 1.0, 1.0))
+        );
+        // The first leaf holds the four smallest x.
+        let mut first: Vec<u32> = b.prim_indices[0..4].to_vec();
+        first.sort();
+        assert_eq!(first, vec![0, 1, 2, 3]);
+    }
+
+    #[test]
+    fn sah_separates_clusters() {
+        // Two tight clusters far apart: the SAH root split separates them.
+        let mut rng = Lcg(9);
+        let mut bounds = Vec::new();
+        for k in 0..2 {
+            for _ in 0..100 {
+                let c = rng.vec() + Vec3::splat(k as f32 * 100.0);
+                bounds.push(Aabb::new(c, c + Vec3::splat(0.01)));
+            }
+        }
+        let b = Bvh::build(&bounds, SplitMethod::SahBinned);
+        assert_eq!(b.validate(&bounds), Ok(()));
+        let left = b.nodes[1].bounds();
+        let right = b.nodes[b.nodes[0].offset as usize].bounds();
+        assert!(left.max.x < 2.0 || right.max.x < 2.0);
+        assert!(left.min.x > 90.0 || right.min.x > 90.0);
+    }
+
+    #[test]
+    fn build_is_deterministic_across_thread_counts() {
+        let bounds = random_tri_bounds(30_000, 1);
+        for m in METHODS {
+            let one = rayon::ThreadPoolBuilder::new()
+                .num_threads(1)
+                .build()
+                .unwrap()
+                .install(|| Bvh::build(&bounds, m));
+            let many = rayon::ThreadPoolBuilder::new()
+                .num_threads(4)
+                .build()
+                .unwrap()
+                .install(|| Bvh::build(&bounds, m));
+            assert_eq!(one.nodes, many.nodes);
+            assert_eq!(one.prim_indices, many.prim_indices);
+        }
+    }
+
+    #[test]
+    fn validate_reports_violations() {
+        let bounds = random_tri_bounds(200, 4);
+        let good = Bvh::build(&bounds, SplitMethod::SahBinned);
+        assert_eq!(good.validate(&bounds), Ok(()));
+        let leaf = good.nodes.iter().position(|n| n.is_leaf()).unwrap();
+        let interior = 0;
+
+        let mut b = good.clone();
+        b.prim_indices[1] = b.prim_indices[0];
+        assert!(b.validate(&bounds).unwrap_err().contains("twice"));
+
+        let mut b = good.clone();
+        b.prim_indices[0] = 999;
+        assert!(b.validate(&bounds).unwrap_err().contains("out of range"));
+
+        let mut b = good.clone();
+        b.nodes[leaf].max[0] -= 1.0;
+        assert!(b.validate(&bounds).is_err());
+
+        let mut b = good.clone();
+        b.nodes[interior].min[1] += 0.5;
+        assert!(
+            b.validate(&bounds)
+                .unwrap_err()
+                .contains("not inside its parent")
+        );
+
+        let mut b = good.clone();
+        b.nodes[interior].offset = b.nodes.len() as u32;
+        assert!(b.validate(&bounds).is_err());
+
+        let mut b = good.clone();
+        let second = b.nodes[0].offset as usize;
+        b.nodes.swap(1, second);
+        assert!(b.validate(&bounds).is_err());
+
+        let mut b = good.clone();
+        b.nodes.push(BvhNode::leaf(bounds[0], 0, 1));
+        assert!(b.validate(&bounds).unwrap_err().contains("unreachable"));
+
+        // An empty leaf is an interior node pointing nowhere sensible.
+        let mut b = good.clone();
+        let last = b.nodes.len() - 1;
+        b.nodes[last].count = 0;
+        assert!(b.validate(&bounds).is_err());
+
+        assert!(good.validate(&bounds[1..]).is_err());
+    }
+}

@@ -1,0 +1,140 @@
+//! Shared helpers for the accel unit tests: a tiny deterministic RNG and
+//! closed test meshes.
+
+use glam::{Vec3, vec3};
+use std::collections::HashMap;
+
+/// Small deterministic generator so the tests need no extra crate.
+pub struct Lcg(pub u64);
+
+impl Lcg {
+    /// Uniform in [0, 1).
+    pub fn next_f32(&mut self) -> f32 {
+        self.0 = self
+            .0
+            .wrapping_mul(6364136223846793005)
+            .wrapping_add(1442695040888963407);
+        ((self.0 >> 40) as f32) / (1u64 << 24) as f32
+    }
+    /// Uniform in the unit cube.
+    pub fn vec(&mut self) -> Vec3 {
+        vec3(self.next_f32(), self.next_f32(), self.next_f32())
+    }
+    /// Uniform unit direction.
+    pub fn dir(&mut self) -> Vec3 {
+        loop {
+            let v = self.vec() * 2.0 - Vec3::ONE;
+            let l = v.length_squared();
+            if l > 1e-4 && l <= 1.0 {
+                return v / l.sqrt();
+            }
+        }
+    }
+}
+
+/// An indexed triangle mesh.
+pub struct Mesh {
+    pub verts: Vec<Vec3>,
+    pub tris: Vec<[u32; 3]>,
+}
+
+impl Mesh {
+    pub fn tri(&self, i: usize) -> (Vec3, Vec3, Vec3) {
+        let [a, b, c] = self.tris[i];
+        (
+            self.verts[a as usize],
+            self.verts[b as usize],
+            self.verts[c as usize],
+        )
+    }
+}
+
+/// An axis-aligned box with awkward (non-dyadic) corners, two triangles per face.
+pub fn cube(min: Vec3, max: Vec3) -> Mesh {
+    let verts = (0..8)
+        .map(|i| {
+            vec3(
+                if i & 1 == 0 { min.x } else { max.x },
+                if i & 2 == 0 { min.y } else { max.y },
+                if i & 4 == 0 { min.z } else { max.z },
+            )
+        })
+        .collect();
+    let quads = [
+        [0, 2, 3, 1],
+        [4, 5, 7, 6],
+        [0, 1, 5, 4],
+        [2, 6, 7, 3],
+        [0, 4, 6, 2],
+        [1, 3, 7, 5],
+    ];
+    let mut tris = Vec::new();
+    for q in quads {
+        tris.push([q[0], q[1], q[2]]);
+        tris.push([q[0], q[2], q[3]]);
+    }
+    Mesh { verts, tris }
+}
+
+/// A unit icosphere with shared vertices, subdivided `levels` times.
+pub fn icosphere(levels: u32) -> Mesh {
+    let t = (1.0 + 5.0f32.sqrt()) / 2.0;
+    let mut verts: Vec<Vec3> = [
+        (-1.0, t, 0.0),
+        (1.0, t, 0.0),
+        (-1.0, -t, 0.0),
+        (1.0, -t, 0.0),
+        (0.0, -1.0, t),
+        (0.0, 1.0, t),
+        (0.0, -1.0, -t),
+        (0.0, 1.0, -t),
+        (t, 0.0, -1.0),
+        (t, 0.0, 1.0),
+        (-t, 0.0, -1.0),
+        (-t, 0.0, 1.0),
+    ]
+    .iter()
+    .map(|&(x, y, z)| vec3(x, y, z).normalize())
+    .collect();
+    let mut tris: Vec<[u32; 3]> = vec![
+        [0, 11, 5],
+        [0, 5, 1],
+        [0, 1, 7],
+        [0, 7, 10],
+        [0, 10, 11],
+        [1, 5, 9],
+        [5, 11, 4],
+        [11, 10, 2],
+        [10, 7, 6],
+        [7, 1, 8],
+        [3, 9, 4],
+        [3, 4, 2],
+        [3, 2, 6],
+        [3, 6, 8],
+        [3, 8, 9],
+        [4, 9, 5],
+        [2, 4, 11],
+        [6, 2, 10],
+        [8, 6, 7],
+        [9, 8, 1],
+    ];
+    for _ in 0..levels {
+        let mut mid: HashMap<(u32, u32), u32> = HashMap::new();
+        let mut midpoint = |a: u32, b: u32, verts: &mut Vec<Vec3>| {
+            let key = (a.min(b), a.max(b));
+            *mid.entry(key).or_insert_with(|| {
+                verts.push(((verts[a as usize] + verts[b as usize]) * 0.5).normalize());
+                verts.len() as u32 - 1
+            })
+        };
+        let mut next = Vec::with_capacity(tris.len() * 4);
+        for [a, b, c] in tris {
+            let ab = midpoint(a, b, &mut verts);
+            let bc = midpoint(b, c, &mut verts);
+            let ca = midpoint(c, a, &mut verts);
+            next.extend([[a, ab, ca], [b, bc, ab], [c, ca, bc], [ab, bc, ca]]);
+        }
+        tris = next;
+    }
+    Mesh { verts, tris }
+}

@@ -1,0 +1,410 @@
+//! Watertight ray/triangle intersection following Sven Woop, Carsten Benthin
+//! and Ingo Wald, "Watertight Ray/Triangle Intersection", JCGT 2(1), 2013.
+//!
+//! The ray is transformed so that it runs along +z from the origin (permute
+//! the axes so the largest |dir| component is z, then shear x and y). The
+//! triangle's 2D edge functions about the origin then decide the hit. Edges
+//! shared by two triangles produce the same edge function value with opposite
+//! sign in both, so a ray can never slip between them; an exactly-zero edge
+//! function is recomputed in f64 so that its sign is exact.
+
+use glam::Vec3;
+
+use super::Ray;
+
+/// A ray/triangle hit: parameter `t` and the barycentric weights of v0, v1, v2.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct TriangleHit {
+    /// Ray parameter of the hit, in units of `ray.dir`.
+    pub t: f32,
+    /// Weight of v0.
+    pub b0: f32,
+    /// Weight of v1.
+    pub b1: f32,
+    /// Weight of v2.
+    pub b2: f32,
+}
+
+/// Per-ray constants of the watertight test: axis permutation and shear.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct RayShear {
+    /// Permuted axis indices; `kz` is the dominant direction axis.
+    pub kx: usize,
+    /// Second permuted axis.
+    pub ky: usize,
+    /// Dominant axis of the direction.
+    pub kz: usize,
+    /// Shear of x: `dir[kx] / dir[kz]`.
+    pub sx: f32,
+    /// Shear of y: `dir[ky] / dir[kz]`.
+    pub sy: f32,
+    /// Scale of z: `1 / dir[kz]`.
+    pub sz: f32,
+}
+
+impl RayShear {
+    /// Precomputes the permutation and shear for `ray` (once per ray).
+    pub fn new(ray: &Ray) -> RayShear {
+        let a = ray.dir.abs();
+        let kz = if a.x >= a.y && a.x >= a.z {
+            0
+        } else if a.y >= a.z {
+            1
+        } else {
+            2
+        };
+        let mut kx = (kz + 1) % 3;
+        let mut ky = (kx + 1) % 3;
+        // Swapping keeps the winding (sign of the edge functions) consistent
+        // with the original orientation when looking down -z.
+        if ray.dir[kz] < 0.0 {
+            std::mem::swap(&mut kx, &mut ky);
+        }
+        let dz = ray.dir[kz];
+        RayShear {
+            kx,
+            ky,
+            kz,
+            sx: ray.dir[kx] / dz,
+            sy: ray.dir[ky] / dz,
+            sz: 1.0 / dz,
+        }
+    }
+}
+
+/// Watertight ray/triangle test; hits both windings with `t` in (0, t_max).
+pub fn intersect_triangle(
+    ray: &Ray,
+    v0: Vec3,
+    v1: Vec3,
+    v2: Vec3,
+    t_max: f32,
+) -> Option<TriangleHit> {
+    intersect_triangle_sheared(&RayShear::new(ray), ray.origin, v0, v1, v2, t_max)
+}
+
+/// Watertight ray/triangle test with the per-ray shear precomputed.
+#[inline(always)]
+pub fn intersect_triangle_sheared(
+    s: &RayShear,
+    ray_origin: Vec3,
+    v0: Vec3,
+    v1: Vec3,
+    v2: Vec3,
+    t_max: f32,
+) -> Option<TriangleHit> {
+    let a = v0 - ray_origin;
+    let b = v1 - ray_origin;
+    let c = v2 - ray_origin;
+    let (kx, ky, kz) = (s.kx, s.ky, s.kz);
+
+    // Shear and scale the vertices into ray space (x and y only for now).
+    let ax = a[kx] - s.sx * a[kz];
+    let ay = a[ky] - s.sy * a[kz];
+    let bx = b[kx] - s.sx * b[kz];
+    let by = b[ky] - s.sy * b[kz];
+    let cx = c[kx] - s.sx * c[kz];
+    let cy = c[ky] - s.sy * c[kz];
+
+    // Scaled barycentric coordinates: 2D edge functions about the origin.
+    let mut u = cx * by - cy * bx;
+    let mut v = ax * cy - ay * cx;
+    let mut w = bx * ay - by * ax;
+
+    // A zero edge function means the ray passes (to f32 precision) through an
+    // edge; f64 products of the f32 inputs are exact, so the sign is exact and
+    // both triangles sharing the edge agree on it.
+    if u == 0.0 || v == 0.0 || w == 0.0 {
+        let (ax, ay, bx, by, cx, cy) = (
+            ax as f64, ay as f64, bx as f64, by as f64, cx as f64, cy as f64,
+        );
+        u = (cx * by - cy * bx) as f32;
+        v = (ax * cy - ay * cx) as f32;
+        w = (bx * ay - by * ax) as f32;
+    }
+
+    // Outside if the signs differ (both windings accepted).
+    if (u < 0.0 || v < 0.0 || w < 0.0) && (u > 0.0 || v > 0.0 || w > 0.0) {
+        return None;
+    }
+    let det = u + v + w;
+    if det == 0.0 {
+        // Degenerate projection: the ray is in the triangle's plane, or the
+        // triangle has no area.
+        return None;
+    }
+
+    // Scaled hit distance; compared against det-scaled bounds to defer the division.
+    let az = s.sz * a[kz];
+    let bz = s.sz * b[kz];
+    let cz = s.sz * c[kz];
+    let t_scaled = u * az + v * bz + w * cz;
+    if det < 0.0 {
+        if t_scaled >= 0.0 || t_scaled <= t_max * det {
+            return None;
+        }
+    } else if t_scaled <= 0.0 || t_scaled >= t_max * det {
+        return None;
+    }
+
+    // Zero-area triangles can leave a rounding-sized det after shearing;
+    // reject them exactly (f64 differences and products of f32 are exact, so
+    // the cross product is zero only for exactly collinear vertices).
+    if is_degenerate(v0, v1, v2) {
+        return None;
+    }
+
+    let inv_det = 1.0 / det;
+    let t = t_scaled * inv_det;
+    // The division can round onto the bounds; also rejects NaN from a zero ray.
+    if !(t > 0.0 && t < t_max) {
+        return None;
+    }
+    Some(TriangleHit {
+        t,
+        b0: u * inv_det,
+        b1: v * inv_det,
+        b2: w * inv_det,
+    })
+}
+
+/// True when the three vertices are exactly collinear (or coincide).
+fn is_degenerate(v0: Vec3, v1: Vec3, v2: Vec3) -> bool {
+    let e1 = v1.as_dvec3() - v0.as_dvec3();
+    let e2 = v2.as_dvec3() - v0.as_dvec3();
+    e1.cross(e2) == glam::DVec3::ZERO
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use glam::vec3;
+
+    use crate::accel::test_util::{Lcg, Mesh, cube, icosphere};
+
+    const V0: Vec3 = Vec3::new(0.0, 0.0, 0.0);
+    const V1: Vec3 = Vec3::new(1.0, 0.0, 0.0);
+    const V2: Vec3 = Vec3::new(0.0, 1.0, 0.0);
+
+    fn down_at(x: f32, y: f32) -> Ray {
+        Ray::new(vec3(x, y, 2.0), vec3(0.0, 0.0, -1.0))
+    }
+
+    #[test]
+    fn interior_hit_is_analytic() {
+        let h = intersect_triangle(&down_at(0.25, 0.5), V0, V1, V2, f32::INFINITY).unwrap();
+        assert_eq!(h.t, 2.0);
+        assert!((h.b0 - 0.25).abs() < 1e-6);
+        assert!((h.b1 - 0.25).abs() < 1e-6);
+        assert!((h.b2 - 0.5).abs() < 1e-6);
+        // Non-unit direction: t in units of dir.
+        let r = Ray::new(vec3(0.25, 0.5, 2.0), vec3(0.0, 0.0, -4.0));
+        let h = intersect_triangle(&r, V0, V1, V2, f32::INFINITY).unwrap();
+        assert_eq!(h.t, 0.5);
+    }
+
+    #[test]
+    fn both_windings_hit_with_same_weights() {
+        let a = intersect_triangle(&down_at(0.2, 0.3), V0, V1, V2, 10.0).unwrap();
+        let b = intersect_triangle(&down_at(0.2, 0.3), V0, V2, V1, 10.0).unwrap();
+        assert_eq!(a.t, b.t);
+        assert!((a.b1 - b.b2).abs() < 1e-6 && (a.b2 - b.b1).abs() < 1e-6);
+        // From below as well.
+        let up = Ray::new(vec3(0.2, 0.3, -1.0), vec3(0.0, 0.0, 1.0));
+        assert_eq!(intersect_triangle(&up, V0, V1, V2, 10.0).unwrap().t, 1.0);
+    }
+
+    #[test]
+    fn vertex_and_edge_hits() {
+        let h = intersect_triangle(&down_at(1.0, 0.0), V0, V1, V2, 10.0).unwrap();
+        assert_eq!((h.t, h.b0, h.b1, h.b2), (2.0, 0.0, 1.0, 0.0));
+        let h = intersect_triangle(&down_at(0.0, 0.0), V0, V1, V2, 10.0).unwrap();
+        assert_eq!((h.b0, h.b1, h.b2), (1.0, 0.0, 0.0));
+        // Midpoint of the hypotenuse v1-v2.
+        let h = intersect_triangle(&down_at(0.5, 0.5), V0, V1, V2, 10.0).unwrap();
+        assert_eq!(h.b0, 0.0);
+        assert!((h.b1 - 0.5).abs() < 1e-6 && (h.b2 - 0.5).abs() < 1e-6);
+        // Just outside that edge.
+        assert!(intersect_triangle(&down_at(0.5, 0.5001), V0, V1, V2, 10.0).is_none());
+    }
+
+    #[test]
+    fn t_range_is_open() {
+        // Behind the origin, at exactly t_max, and beyond t_max: no hit.
+        let r = Ray::new(vec3(0.2, 0.2, -1.0), vec3(0.0, 0.0, -1.0));
+        assert!(intersect_triangle(&r, V0, V1, V2, 10.0).is_none());
+        assert!(intersect_triangle(&down_at(0.2, 0.2), V0, V1, V2, 2.0).is_none());
+        assert!(intersect_triangle(&down_at(0.2, 0.2), V0, V1, V2, 1.5).is_none());
+        assert!(intersect_triangle(&down_at(0.2, 0.2), V0, V1, V2, 2.0001).is_some());
+        // Origin on the triangle: t = 0 is not a hit.
+        let r = Ray::new(vec3(0.2, 0.2, 0.0), vec3(0.0, 0.0, 1.0));
+        assert!(intersect_triangle(&r, V0, V1, V2, 10.0).is_none());
+    }
+
+    #[test]
+    fn degenerate_triangles_never_hit() {
+        let mut rng = Lcg(7);
+        let tris = [
+            // Two equal vertices.
+            (
+                vec3(0.0, 0.0, 0.0),
+                vec3(1.0, 0.0, 0.0),
+                vec3(1.0, 0.0, 0.0),
+            ),
+            // Collinear, not axis aligned.
+            (
+                vec3(0.0, 0.0, 0.0),
+                vec3(1.0, 1.0, 1.0),
+                vec3(3.0, 3.0, 3.0),
+            ),
+            (
+                vec3(0.1, 0.2, 0.3),
+                vec3(0.2, 0.4, 0.6),
+                vec3(0.4, 0.8, 1.2),
+            ),
+            // All points equal.
+            (
+                vec3(0.5, 0.5, 0.5),
+                vec3(0.5, 0.5, 0.5),
+                vec3(0.5, 0.5, 0.5),
+            ),
+        ];
+        for (a, b, c) in tris {
+            for i in 0..20000 {
+                // Aim at points of the degenerate segment (and at its ends).
+                let s = if i % 3 == 0 {
+                    (i % 2) as f32
+                } else {
+                    rng.next_f32()
+                };
+                let target = a.lerp(c, s);
+                let origin = target + rng.dir() * 3.0;
+                let r = Ray::new(origin, target - origin);
+                assert!(intersect_triangle(&r, a, b, c, f32::INFINITY).is_none());
+            }
+        }
+    }
+
+    #[test]
+    fn ray_in_plane_misses_without_nan() {
+        let r = Ray::new(vec3(-1.0, 0.2, 0.0), vec3(1.0, 0.0, 0.0));
+        assert!(intersect_triangle(&r, V0, V1, V2, f32::INFINITY).is_none());
+        // Zero direction: no hit, no NaN hit.
+        let r = Ray::new(vec3(0.2, 0.2, 1.0), Vec3::ZERO);
+        assert!(intersect_triangle(&r, V0, V1, V2, f32::INFINITY).is_none());
+    }
+
+    #[test]
+    fn random_hits_reproduce_the_hit_point() {
+        let mut rng = Lcg(3);
+        for _ in 0..10000 {
+            let (a, b, c) = (rng.vec(), rng.vec(), rng.vec());
+            let (w1, w2) = (rng.next_f32(), rng.next_f32());
+            let (w1, w2) = if w1 + w2 > 1.0 {
+                (1.0 - w1, 1.0 - w2)
+            } else {
+                (w1, w2)
+            };
+            let p = a + w1 * (b - a) + w2 * (c - a);
+            let o = p + rng.dir() * 2.0;
+            let r = Ray::new(o, p - o);
+            if let Some(h) = intersect_triangle(&r, a, b, c, 10.0) {
+                assert!(h.b0 >= 0.0 && h.b1 >= 0.0 && h.b2 >= 0.0);
+                assert!((h.b0 + h.b1 + h.b2 - 1.0).abs() < 1e-4);
+                assert!((h.t - 1.0).abs() < 1e-3, "t {}", h.t);
+            }
+        }
+    }
+
+    /// Counts rays that hit no triangle of `mesh` (brute force).
+    fn misses(mesh: &Mesh, rays: &[Ray]) -> usize {
+        rays.iter()
+            .filter(|r| {
+                let s = RayShear::new(r);
+                !(0..mesh.tris.len()).any(|i| {
+                    let (a, b, c) = mesh.tri(i);
+                    intersect_triangle_sheared(&s, r.origin, a, b, c, f32::INFINITY).is_some()
+                })
+            })
+            .count()
+    }
+
+    /// Points exactly on shared edges (several fractions along each) and on vertices.
+    fn edge_and_vertex_points(mesh: &Mesh, rng: &mut Lcg) -> Vec<Vec3> {
+        let mut pts = mesh.verts.clone();
+        for i in 0..mesh.tris.len() {
+            let (a, b, c) = mesh.tri(i);
+            for (p, q) in [(a, b), (b, c), (c, a)] {
+                for f in [0.5, 0.25, rng.next_f32(), rng.next_f32()] {
+                    pts.push(p.lerp(q, f));
+                }
+            }
+        }
+        pts
+    }
+
+    fn check_closed(mesh: &Mesh, centre: Vec3, seed: u64, reps: usize) {
+        let mut rng = Lcg(seed);
+        let pts: Vec<Vec3> = (0..reps)
+            .flat_map(|_| edge_and_vertex_points(mesh, &mut rng))
+            .collect();
+        // From outside, along the outward radial line through the point: the
+        // ray crosses the surface transversally there, so it must hit.
+        let outside: Vec<Ray> = pts
+            .iter()
+            .map(|&p| {
+                let o = centre + (p - centre) * 3.0;
+                Ray::new(o, p - o)
+            })
+            .collect();
+        // From inside (random interior points) through the same points.
+        let inside: Vec<Ray> = pts
+            .iter()
+            .map(|&p| {
+                let o = centre + (rng.vec() - Vec3::splat(0.5)) * 0.2;
+                Ray::new(o, p - o)
+            })
+            .collect();
+        // From inside in random directions.
+        let random: Vec<Ray> = (0..pts.len())
+            .map(|_| Ray::new(centre, rng.dir()))
+            .collect();
+        assert!(pts.len() > 1000, "too few test rays: {}", pts.len());
+        assert_eq!(misses(mesh, &outside), 0, "outside rays slipped through");
+        assert_eq!(misses(mesh, &inside), 0, "inside rays slipped through");
+        assert_eq!(misses(mesh, &random), 0, "random inside rays escaped");
+    }
+
+    #[test]
+    fn watertight_icosphere() {
+        let mut m = icosphere(3);
+        // Move it off the origin with awkward values so the arithmetic rounds.
+        let off = vec3(0.3137, -1.771, 2.0913);
+        for v in &mut m.verts {
+            *v = *v * 1.37 + off;
+        }
+        check_closed(&m, off, 11, 1);
+    }
+
+    #[test]
+    fn watertight_cube() {
+        let min = vec3(-0.713, -1.291, 0.377);
+        let max = vec3(1.119, 0.8537, 2.2211);
+        let m = cube(min, max);
+        // Many rays through the few edges of a cube.
+        let mut rng = Lcg(5);
+        let centre = (min + max) * 0.5;
+        let mut rays = Vec::new();
+        for _ in 0..200 {
+            for p in edge_and_vertex_points(&m, &mut rng) {
+                let o = centre + (rng.vec() - Vec3::splat(0.5)) * 0.5;
+                rays.push(Ray::new(o, p - o));
+                let o = centre + (p - centre) * (2.0 + rng.next_f32());
+                rays.push(Ray::new(o, p - o));
+            }
+        }
+        assert!(rays.len() > 10000);
+        assert_eq!(misses(&m, &rays), 0);
+        check_closed(&m, centre, 17, 50);
+    }
+}
