@@ -11,6 +11,7 @@ use glam::Vec3;
 pub mod aabb;
 pub mod build;
 pub mod bvh;
+pub mod scene;
 pub mod sphere;
 pub mod traverse;
 pub mod triangle;

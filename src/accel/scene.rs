@@ -85,7 +85,8 @@ pub fn build_triangle_bvh(
         let v = &mesh.data.vertices;
         for t in &mesh.data.triangles {
             let [a, b, c] = t.map(|i| &v[i as usize]);
-            g.tri_positions.push([a, b, c].map(|v| m.transform_point3(v.position)));
+            g.tri_positions
+                .push([a, b, c].map(|v| m.transform_point3(v.position)));
             g.tri_normals.push([a, b, c].map(|v| {
                 (normal_from_object * glam::Vec3A::from(v.normal))
                     .try_normalize()

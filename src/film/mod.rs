@@ -106,7 +106,11 @@ pub fn to_rgb8(pixels: &[Vec3], encoding: Encoding) -> Vec<u8> {
         .iter()
         .flat_map(|p| p.to_array())
         .map(|v| {
-            let v = if v.is_finite() { v.clamp(0.0, 1.0) } else { 0.0 };
+            let v = if v.is_finite() {
+                v.clamp(0.0, 1.0)
+            } else {
+                0.0
+            };
             let v = match encoding {
                 Encoding::Linear => v,
                 Encoding::Srgb => srgb_encode(v),
@@ -146,8 +150,7 @@ pub fn write_image(
             .map(|img| img.write_to(&mut bytes, format))
     } else {
         let raw = pixels.iter().flat_map(|p| p.to_array()).collect();
-        image::Rgb32FImage::from_raw(width, height, raw)
-            .map(|img| img.write_to(&mut bytes, format))
+        image::Rgb32FImage::from_raw(width, height, raw).map(|img| img.write_to(&mut bytes, format))
     };
     match encoded {
         Some(Ok(())) => {}
@@ -177,10 +180,9 @@ pub fn write_atomically(path: &Path, bytes: &[u8]) -> Result<()> {
         Some(d) if !d.as_os_str().is_empty() => d.to_owned(),
         _ => PathBuf::from("."),
     };
-    let name = path.file_name().map_or_else(
-        || "output".into(),
-        |n| n.to_string_lossy().into_owned(),
-    );
+    let name = path
+        .file_name()
+        .map_or_else(|| "output".into(), |n| n.to_string_lossy().into_owned());
     let tmp = dir.join(format!(".{name}.{}.tmp", std::process::id()));
     let result = std::fs::File::create(&tmp)
         .and_then(|mut f| {

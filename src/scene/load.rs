@@ -356,7 +356,10 @@ pub fn spawn_scene(world: &mut World, file: &SceneFile, path: &Path) -> Result<(
             let known: Vec<&str> = materials.keys().copied().collect();
             c.err(
                 "material",
-                format!("unknown material \"{name}\" (defined: {})", known.join(", ")),
+                format!(
+                    "unknown material \"{name}\" (defined: {})",
+                    known.join(", ")
+                ),
             )
         })
     };

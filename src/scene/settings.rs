@@ -199,7 +199,8 @@ mod tests {
         s.set("shadows", "false").unwrap();
         s.set("pixel_samples", "16").unwrap();
         s.set("background", "(0.1, 0.2, 0.3)").unwrap();
-        s.set("gradient", "[(1, (0, 1, 0)), (0, (1, 0, 0))]").unwrap();
+        s.set("gradient", "[(1, (0, 1, 0)), (0, (1, 0, 0))]")
+            .unwrap();
         assert_eq!(s.shading_model, ShadingModel::BlinnPhong);
         assert!(!s.shadows);
         assert_eq!(s.pixel_samples, 16);
@@ -210,7 +211,11 @@ mod tests {
     #[test]
     fn set_rejects_unknown_keys_and_bad_values() {
         let mut s = Settings::default();
-        assert!(s.set("shadow", "true").unwrap_err().contains("unknown setting"));
+        assert!(
+            s.set("shadow", "true")
+                .unwrap_err()
+                .contains("unknown setting")
+        );
         assert!(s.set("pixel_samples", "many").is_err());
         assert!(s.set("shading_model", "toon").is_err());
     }

@@ -86,7 +86,11 @@ pub fn uv_sphere(segments: u32, rings: u32) -> MeshData {
         let theta = std::f32::consts::PI * r as f32 / rings as f32;
         for s in 0..=segments {
             let phi = std::f32::consts::TAU * s as f32 / segments as f32;
-            let p = Vec3::new(theta.sin() * phi.cos(), theta.cos(), -theta.sin() * phi.sin());
+            let p = Vec3::new(
+                theta.sin() * phi.cos(),
+                theta.cos(),
+                -theta.sin() * phi.sin(),
+            );
             vertices.push(Vertex {
                 position: p,
                 normal: p,
@@ -267,6 +271,9 @@ mod tests {
     fn smooth_normals_of_degenerate_triangles_are_finite() {
         let p = [Vec3::ZERO; 3];
         let n = smooth_normals(&p, &[[0, 1, 2]]);
-        assert!(n.iter().all(|n| n.is_finite() && (n.length() - 1.0).abs() < 1e-6));
+        assert!(
+            n.iter()
+                .all(|n| n.is_finite() && (n.length() - 1.0).abs() < 1e-6)
+        );
     }
 }

@@ -6,8 +6,8 @@ use std::sync::Arc;
 use bevy_ecs::prelude::*;
 use glam::{Vec2, Vec3};
 
-use super::stats::RenderStats;
 use super::StageErrors;
+use super::stats::RenderStats;
 use crate::error::GlintError;
 use crate::scene::{Material, Settings, TextureSource};
 use crate::shade::texture::{Texture, WrapMode};

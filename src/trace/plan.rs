@@ -66,12 +66,15 @@ pub fn analyse_scene(
 ) {
     let s = &*settings;
     let triangles: usize = meshes.iter().map(|m| m.data.triangles.len()).sum();
-    let lights = point_lights.iter().len() + segment_lights.iter().len()
-        + parallelogram_lights.iter().len();
+    let lights =
+        point_lights.iter().len() + segment_lights.iter().len() + parallelogram_lights.iter().len();
     let area_lights = segment_lights.iter().len() + parallelogram_lights.iter().len();
     let textured = materials.iter().filter(|m| m.kd_texture.is_some()).count();
     let transparent = materials.iter().filter(|m| m.transparency < 1.0).count();
-    let specular = materials.iter().filter(|m| m.ks != glam::Vec3::ZERO).count();
+    let specular = materials
+        .iter()
+        .filter(|m| m.ks != glam::Vec3::ZERO)
+        .count();
     let bvh = match s.acceleration {
         Acceleration::Bvh => "a BVH",
         Acceleration::None => "a single leaf (acceleration: none)",
