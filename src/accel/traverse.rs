@@ -60,9 +60,7 @@ impl Bvh {
         let origin = ray.origin;
         let mut best_t = t_max;
         let mut best = None;
-        let Some(t_root) = root.bounds().intersect_ray(origin, inv_dir, best_t) else {
-            return None;
-        };
+        let t_root = root.bounds().intersect_ray(origin, inv_dir, best_t)?;
         let mut stack = [Entry::default(); STACK_SIZE];
         let mut sp = 0;
         let mut cur = Entry {
@@ -79,11 +77,11 @@ impl Bvh {
                     for k in node.offset..node.offset + node.count {
                         let prim = self.prim_indices[k as usize];
                         visitor.test_prim(prim);
-                        if let Some(t) = hit(prim, best_t) {
-                            if t < best_t {
-                                best_t = t;
-                                best = Some((prim, t));
-                            }
+                        if let Some(t) = hit(prim, best_t)
+                            && t < best_t
+                        {
+                            best_t = t;
+                            best = Some((prim, t));
                         }
                     }
                 } else {
