@@ -1,1 +1,323 @@
-fn main() {}
+//! BVH benchmarks: glint's binned-SAH BVH next to `obvhs` (PLOC + CWBVH8) on
+//! the same procedural triangles and the same rays, in the same criterion
+//! groups. Build figures are Mtris/s, traversal figures Mrays/s (criterion
+//! "elements" are triangles resp. rays). Traversal runs on one thread.
+
+use std::hint::black_box;
+use std::time::Duration;
+
+use criterion::{
+    BenchmarkId, Criterion, SamplingMode, Throughput, criterion_group, criterion_main,
+};
+use glam::{Vec3, Vec3A, vec3};
+use glint::accel::{Aabb, Bvh, Ray, RayShear, SplitMethod, intersect_triangle_sheared};
+use obvhs::BvhBuildParams;
+use obvhs::cwbvh::{CwBvh, builder::build_cwbvh_from_tris};
+use obvhs::ray::{Ray as ORay, RayHit};
+use obvhs::triangle::Triangle;
+
+/// Deterministic generator (no extra dev-dependency).
+struct Lcg(u64);
+impl Lcg {
+    fn f(&mut self) -> f32 {
+        self.0 = self
+            .0
+            .wrapping_mul(6364136223846793005)
+            .wrapping_add(1442695040888963407);
+        ((self.0 >> 40) as f32) / (1u64 << 24) as f32
+    }
+    fn dir(&mut self) -> Vec3 {
+        loop {
+            let v = vec3(self.f(), self.f(), self.f()) * 2.0 - Vec3::ONE;
+            let l = v.length_squared();
+            if l > 1e-4 && l <= 1.0 {
+                return v / l.sqrt();
+            }
+        }
+    }
+}
+
+/// A lat-long sphere of `n × n` quads, displaced by a few sines and a little
+/// per-vertex noise, so that it has detail at several scales. Pole triangles
+/// that would be degenerate are left out.
+fn displaced_sphere(n: usize) -> Vec<[Vec3; 3]> {
+    let mut rng = Lcg(12345);
+    let cols = n;
+    let rows = n;
+    let mut verts = Vec::with_capacity((rows + 1) * cols);
+    for i in 0..=rows {
+        let theta = std::f32::consts::PI * i as f32 / rows as f32;
+        for j in 0..cols {
+            let phi = std::f32::consts::TAU * j as f32 / cols as f32;
+            let r = 1.0
+                + 0.08 * (9.0 * theta).sin() * (7.0 * phi).cos()
+                + 0.03 * (31.0 * theta + 2.0).sin() * (29.0 * phi).sin()
+                + 0.004 * (rng.f() - 0.5);
+            verts.push(
+                r * vec3(
+                    theta.sin() * phi.cos(),
+                    theta.cos(),
+                    theta.sin() * phi.sin(),
+                ),
+            );
+        }
+    }
+    let at = |i: usize, j: usize| verts[i * cols + j % cols];
+    let mut tris = Vec::with_capacity(2 * rows * cols);
+    for i in 0..rows {
+        for j in 0..cols {
+            let (a, b, c, d) = (at(i, j), at(i, j + 1), at(i + 1, j + 1), at(i + 1, j));
+            if i != 0 {
+                tris.push([a, b, c]);
+            }
+            if i != rows - 1 {
+                tris.push([a, c, d]);
+            }
+        }
+    }
+    tris
+}
+
+/// Pinhole camera grid looking at the mesh from +z.
+fn primary_rays(w: usize, h: usize) -> Vec<Ray> {
+    let eye = vec3(0.3, 0.4, 3.0);
+    let fwd = (Vec3::ZERO - eye).normalize();
+    let right = fwd.cross(Vec3::Y).normalize();
+    let up = right.cross(fwd);
+    let tan = (40f32.to_radians() * 0.5).tan();
+    let mut rays = Vec::with_capacity(w * h);
+    for y in 0..h {
+        for x in 0..w {
+            let u = ((x as f32 + 0.5) / w as f32 * 2.0 - 1.0) * tan;
+            let v = (1.0 - (y as f32 + 0.5) / h as f32 * 2.0) * tan;
+            rays.push(Ray::new(eye, (fwd + u * right + v * up).normalize()));
+        }
+    }
+    rays
+}
+
+/// Random surface points (with their geometric normals).
+fn surface_points(tris: &[[Vec3; 3]], n: usize, rng: &mut Lcg) -> Vec<(Vec3, Vec3)> {
+    (0..n)
+        .map(|_| {
+            let [a, b, c] = tris[((rng.f() * tris.len() as f32) as usize).min(tris.len() - 1)];
+            let (mut u, mut v) = (rng.f(), rng.f());
+            if u + v > 1.0 {
+                (u, v) = (1.0 - u, 1.0 - v);
+            }
+            let p = a + u * (b - a) + v * (c - a);
+            let nrm = (b - a).cross(c - a).normalize_or_zero();
+            // Orient outwards (the mesh is star-shaped about the origin).
+            let nrm = if nrm.dot(p) < 0.0 { -nrm } else { nrm };
+            (p, nrm)
+        })
+        .collect()
+}
+
+/// Random origins just off the surface (either side), random directions.
+fn incoherent_rays(tris: &[[Vec3; 3]], n: usize) -> Vec<Ray> {
+    let mut rng = Lcg(777);
+    surface_points(tris, n, &mut rng)
+        .into_iter()
+        .map(|(p, nrm)| {
+            let side = if rng.f() < 0.5 { 1.0 } else { -1.0 };
+            Ray::new(p + side * 1e-3 * nrm, rng.dir())
+        })
+        .collect()
+}
+
+/// Shadow rays from points just outside the surface to a point light; t in (0, 1).
+fn shadow_rays(tris: &[[Vec3; 3]], n: usize) -> Vec<Ray> {
+    let light = vec3(2.0, 3.0, 2.5);
+    let mut rng = Lcg(999);
+    surface_points(tris, n, &mut rng)
+        .into_iter()
+        .map(|(p, nrm)| {
+            let o = p + 1e-3 * nrm;
+            Ray::new(o, light - o)
+        })
+        .collect()
+}
+
+fn glint_closest(bvh: &Bvh, tris: &[[Vec3; 3]], ray: &Ray) -> Option<(u32, f32)> {
+    let s = RayShear::new(ray);
+    bvh.closest_hit(ray, f32::INFINITY, &mut (), |p, t_max| {
+        let [a, b, c] = tris[p as usize];
+        intersect_triangle_sheared(&s, ray.origin, a, b, c, t_max).map(|h| h.t)
+    })
+}
+
+fn glint_occluded(bvh: &Bvh, tris: &[[Vec3; 3]], ray: &Ray) -> bool {
+    let s = RayShear::new(ray);
+    bvh.any_hit(ray, 1.0, &mut (), |p| {
+        let [a, b, c] = tris[p as usize];
+        intersect_triangle_sheared(&s, ray.origin, a, b, c, 1.0).is_some()
+    })
+}
+
+fn to_oray(r: &Ray, t_max: f32) -> ORay {
+    ORay::new(Vec3A::from(r.origin), Vec3A::from(r.dir), 0.0, t_max)
+}
+
+fn obvhs_closest(bvh: &CwBvh, tris: &[Triangle], ray: &ORay) -> Option<(u32, f32)> {
+    let mut hit = RayHit::none();
+    bvh.ray_traverse(*ray, &mut hit, |r, id| {
+        tris[bvh.primitive_indices[id] as usize].intersect(r)
+    })
+    .then(|| (bvh.primitive_indices[hit.primitive_id as usize], hit.t))
+}
+
+fn obvhs_occluded(bvh: &CwBvh, tris: &[Triangle], ray: &ORay) -> bool {
+    !bvh.ray_traverse_miss(*ray, |r, id| {
+        tris[bvh.primitive_indices[id] as usize].intersect(r)
+    })
+}
+
+fn bench_size(c: &mut Criterion, label: &str, n: usize, samples: usize) {
+    let tris = displaced_sphere(n);
+    let bounds: Vec<Aabb> = tris.iter().map(|t| Aabb::from_points(t)).collect();
+    let otris: Vec<Triangle> = tris
+        .iter()
+        .map(|t| Triangle {
+            v0: t[0].into(),
+            v1: t[1].into(),
+            v2: t[2].into(),
+        })
+        .collect();
+    eprintln!("{label}: {} triangles", tris.len());
+    let one_thread = rayon::ThreadPoolBuilder::new()
+        .num_threads(1)
+        .build()
+        .unwrap();
+
+    // Build.
+    {
+        let mut g = c.benchmark_group(format!("build/{label}"));
+        g.sample_size(samples)
+            .sampling_mode(SamplingMode::Flat)
+            .warm_up_time(Duration::from_millis(500))
+            .throughput(Throughput::Elements(tris.len() as u64));
+        g.bench_function("glint_sah_rayon", |b| {
+            b.iter(|| Bvh::build(black_box(&bounds), SplitMethod::SahBinned))
+        });
+        g.bench_function("glint_sah_1thread", |b| {
+            b.iter(|| one_thread.install(|| Bvh::build(black_box(&bounds), SplitMethod::SahBinned)))
+        });
+        g.bench_function("glint_median_rayon", |b| {
+            b.iter(|| Bvh::build(black_box(&bounds), SplitMethod::Median))
+        });
+        // obvhs is built without its `parallel` feature here: single-threaded.
+        g.bench_function("obvhs_cwbvh_medium_1thread", |b| {
+            b.iter(|| {
+                build_cwbvh_from_tris(
+                    black_box(&otris),
+                    BvhBuildParams::medium_build(),
+                    &mut Duration::default(),
+                )
+            })
+        });
+        g.bench_function("obvhs_cwbvh_fast_1thread", |b| {
+            b.iter(|| {
+                build_cwbvh_from_tris(
+                    black_box(&otris),
+                    BvhBuildParams::fast_build(),
+                    &mut Duration::default(),
+                )
+            })
+        });
+        g.finish();
+    }
+
+    let bvh = Bvh::build(&bounds, SplitMethod::SahBinned);
+    let cw = build_cwbvh_from_tris(
+        &otris,
+        BvhBuildParams::medium_build(),
+        &mut Duration::default(),
+    );
+    eprintln!(
+        "{label}: glint BVH {} nodes, {} leaves, depth {}; obvhs CWBVH {} nodes",
+        bvh.nodes.len(),
+        bvh.leaf_count(),
+        bvh.depth(),
+        cw.nodes.len()
+    );
+
+    let ray_sets: [(&str, Vec<Ray>); 3] = [
+        ("primary", primary_rays(256, 256)),
+        ("incoherent", incoherent_rays(&tris, 65536)),
+        ("shadow", shadow_rays(&tris, 65536)),
+    ];
+    for (case, rays) in &ray_sets {
+        let shadow = *case == "shadow";
+        let t_max = if shadow { 1.0 } else { f32::INFINITY };
+        let orays: Vec<ORay> = rays.iter().map(|r| to_oray(r, t_max)).collect();
+        // Sanity: both libraries see (almost) the same hits; the triangle
+        // tests differ (watertight vs Möller-Trumbore), so edges may differ.
+        let (gh, oh) = if shadow {
+            (
+                rays.iter()
+                    .filter(|r| glint_occluded(&bvh, &tris, r))
+                    .count(),
+                orays
+                    .iter()
+                    .filter(|r| obvhs_occluded(&cw, &otris, r))
+                    .count(),
+            )
+        } else {
+            (
+                rays.iter()
+                    .filter_map(|r| glint_closest(&bvh, &tris, r))
+                    .count(),
+                orays
+                    .iter()
+                    .filter_map(|r| obvhs_closest(&cw, &otris, r))
+                    .count(),
+            )
+        };
+        eprintln!(
+            "{label}/{case}: {} rays, hits glint {gh} obvhs {oh}",
+            rays.len()
+        );
+
+        let mut g = c.benchmark_group(format!("{case}/{label}"));
+        g.sample_size(samples)
+            .warm_up_time(Duration::from_millis(500))
+            .measurement_time(Duration::from_secs(2))
+            .throughput(Throughput::Elements(rays.len() as u64));
+        g.bench_function(BenchmarkId::new("glint", label), |b| {
+            b.iter(|| {
+                let mut hits = 0u32;
+                for r in rays {
+                    hits += if shadow {
+                        glint_occluded(&bvh, &tris, r) as u32
+                    } else {
+                        glint_closest(&bvh, &tris, r).is_some() as u32
+                    };
+                }
+                hits
+            })
+        });
+        g.bench_function(BenchmarkId::new("obvhs", label), |b| {
+            b.iter(|| {
+                let mut hits = 0u32;
+                for r in &orays {
+                    hits += if shadow {
+                        obvhs_occluded(&cw, &otris, r) as u32
+                    } else {
+                        obvhs_closest(&cw, &otris, r).is_some() as u32
+                    };
+                }
+                hits
+            })
+        });
+        g.finish();
+    }
+}
+
+fn benches(c: &mut Criterion) {
+    bench_size(c, "100k", 224, 20);
+    bench_size(c, "1M", 708, 10);
+}
+
+criterion_group!(bvh, benches);
+criterion_main!(bvh);

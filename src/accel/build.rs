@@ -118,7 +118,8 @@ fn split(
     }
     let ext = centroid_bounds.extent();
     // All centroids coincide (or are NaN): no plane separates them.
-    if !(ext.max_element() > 0.0) {
+    let widest = ext.max_element();
+    if widest.is_nan() || widest <= 0.0 {
         return None;
     }
     if ctx.split == SplitMethod::Median || depth >= SAH_DEPTH_LIMIT {

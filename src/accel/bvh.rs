@@ -154,10 +154,10 @@ impl Bvh {
             }
             let node = &self.nodes[i as usize];
             let b = node.bounds();
-            if let Some(p) = parent {
-                if !self.nodes[p as usize].bounds().contains_box(&b) {
-                    return Err(format!("node {i} box is not inside its parent {p}"));
-                }
+            if let Some(p) = parent
+                && !self.nodes[p as usize].bounds().contains_box(&b)
+            {
+                return Err(format!("node {i} box is not inside its parent {p}"));
             }
             if node.is_leaf() {
                 if node.offset != next_prim {

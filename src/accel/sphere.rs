@@ -23,8 +23,8 @@ pub fn intersect_sphere(ray: &Ray, center: glam::Vec3, radius: f32, t_max: f32) 
     // enough even when |f| is huge compared to the radius.
     let perp = f + (b / a) * d;
     let disc = a * (radius * radius - perp.dot(perp));
-    // `!(disc >= 0)` also rejects NaN (e.g. a zero direction).
-    if !(disc >= 0.0) {
+    // NaN comes from a zero direction.
+    if disc.is_nan() || disc < 0.0 {
         return None;
     }
     let q = b + b.signum() * disc.sqrt();

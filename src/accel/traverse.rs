@@ -60,9 +60,7 @@ impl Bvh {
         let origin = ray.origin;
         let mut best_t = t_max;
         let mut best = None;
-        let Some(t_root) = root.bounds().intersect_ray(origin, inv_dir, best_t) else {
-            return None;
-        };
+        let t_root = root.bounds().intersect_ray(origin, inv_dir, best_t)?;
         let mut stack = [Entry::default(); STACK_SIZE];
         let mut sp = 0;
         let mut cur = Entry {
@@ -79,11 +77,11 @@ impl Bvh {
                     for k in node.offset..node.offset + node.count {
                         let prim = self.prim_indices[k as usize];
                         visitor.test_prim(prim);
-                        if let Some(t) = hit(prim, best_t) {
-                            if t < best_t {
-                                best_t = t;
-                                best = Some((prim, t));
-                            }
+                        if let Some(t) = hit(prim, best_t)
+                            && t < best_t
+                        {
+                            best_t = t;
+                            best = Some((prim, t));
                         }
                     }
                 } else {
@@ -142,26 +140,28 @@ impl Bvh {
         visitor: &mut impl TraversalVisitor,
         mut visit: impl FnMut(u32) -> bool,
     ) -> bool {
-        if self.nodes.is_empty() {
+        let Some(root) = self.nodes.first() else {
             return false;
-        }
+        };
         let inv_dir = ray.dir.recip();
         let origin = ray.origin;
-        // (node, depth); boxes are tested when popped, no ordering needed.
-        let mut stack = [(0u32, 0u32); STACK_SIZE + 1];
-        let mut sp = 1;
-        while sp > 0 {
-            sp -= 1;
-            let (i, depth) = stack[sp];
-            let node = &self.nodes[i as usize];
-            if node
-                .bounds()
-                .intersect_ray(origin, inv_dir, t_max)
-                .is_none()
-            {
-                continue;
-            }
+        if root
+            .bounds()
+            .intersect_ray(origin, inv_dir, t_max)
+            .is_none()
+        {
+            return false;
+        }
+        // Same near-first order as closest_hit: no ordering is required for
+        // correctness, but shadow rays leaving a surface are mostly blocked
+        // close to their origin, so the near child finds the occluder sooner.
+        let mut stack = [(0u32, 0u32); STACK_SIZE];
+        let mut sp = 0;
+        let mut cur = (0u32, 0u32);
+        loop {
+            let (i, depth) = cur;
             visitor.visit_node(i, depth);
+            let node = &self.nodes[i as usize];
             if node.is_leaf() {
                 for k in node.offset..node.offset + node.count {
                     let prim = self.prim_indices[k as usize];
@@ -171,13 +171,36 @@ impl Bvh {
                     }
                 }
             } else {
-                // Second child below the first so the first is visited first.
-                stack[sp] = (node.offset, depth + 1);
-                stack[sp + 1] = (i + 1, depth + 1);
-                sp += 2;
+                let (a, b) = (i + 1, node.offset);
+                let ta = self.nodes[a as usize]
+                    .bounds()
+                    .intersect_ray(origin, inv_dir, t_max);
+                let tb = self.nodes[b as usize]
+                    .bounds()
+                    .intersect_ray(origin, inv_dir, t_max);
+                let depth = depth + 1;
+                let next = match (ta, tb) {
+                    (Some(ta), Some(tb)) => {
+                        let (near, far) = if tb < ta { (b, a) } else { (a, b) };
+                        stack[sp] = (far, depth);
+                        sp += 1;
+                        Some(near)
+                    }
+                    (Some(_), None) => Some(a),
+                    (None, Some(_)) => Some(b),
+                    (None, None) => None,
+                };
+                if let Some(n) = next {
+                    cur = (n, depth);
+                    continue;
+                }
             }
+            if sp == 0 {
+                return false;
+            }
+            sp -= 1;
+            cur = stack[sp];
         }
-        false
     }
 }
 

@@ -93,9 +93,10 @@ pub fn intersect_triangle_sheared(
     v2: Vec3,
     t_max: f32,
 ) -> Option<TriangleHit> {
-    let a = v0 - ray_origin;
-    let b = v1 - ray_origin;
-    let c = v2 - ray_origin;
+    // Arrays index without glam's per-component `match`.
+    let a = (v0 - ray_origin).to_array();
+    let b = (v1 - ray_origin).to_array();
+    let c = (v2 - ray_origin).to_array();
     let (kx, ky, kz) = (s.kx, s.ky, s.kz);
 
     // Shear and scale the vertices into ray space (x and y only for now).
