@@ -32,7 +32,7 @@ fn an_occluder_between_point_and_light_makes_the_pixel_exactly_black() {
     let blocker = ", Mesh((material: Some(\"m\"), geometry: Parallelogram(origin: (0.4, -0.1, 0.5), edge_u: (0.2, 0, 0), edge_v: (0, 0.2, 0))))";
     let r = render(&lit_quad_scene("lambertian", blocker));
     assert_eq!(r.film().pixel(1, 1), Vec3::ZERO);
-    assert_eq!(r.stats().items("trace_shadow_rays") > 0, true);
+    assert!(r.stats().items("trace_shadow_rays") > 0);
 }
 
 #[test]
@@ -63,7 +63,11 @@ fn the_bvh_built_by_the_schedule_validates_and_covers_every_triangle() {
     let g = r.world.resource::<SceneGeometry>();
     // 5 walls of 2 triangles, 2 boxes of 12.
     assert_eq!(g.tri_positions.len(), 34);
-    let bounds: Vec<Aabb> = g.tri_positions.iter().map(|p| Aabb::from_points(p)).collect();
+    let bounds: Vec<Aabb> = g
+        .tri_positions
+        .iter()
+        .map(|p| Aabb::from_points(p))
+        .collect();
     g.tri_bvh.validate(&bounds).unwrap();
     let mut covered = g.tri_bvh.prim_indices.clone();
     covered.sort_unstable();
@@ -82,10 +86,9 @@ fn a_spheres_only_scene_builds_no_triangle_bvh() {
 
 #[test]
 fn shadows_off_or_no_lights_run_no_shadow_stage() {
-    let off = render(&lit_quad_scene("lambertian", "").replace(
-        "settings: (",
-        "settings: (shadows: false, ",
-    ));
+    let off = render(
+        &lit_quad_scene("lambertian", "").replace("settings: (", "settings: (shadows: false, "),
+    );
     assert!(!off.stats().ran("trace_shadow_rays"));
     assert_eq!(off.stats().rays.shadow, 0);
     // Without shadows the same pixel is lit even with the occluder in place.

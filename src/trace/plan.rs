@@ -53,6 +53,15 @@ impl RenderPlan {
     }
 }
 
+/// Query filter: any light entity.
+type AnyLight = Or<(
+    With<PointLight>,
+    With<SegmentLight>,
+    With<ParallelogramLight>,
+)>;
+/// Query filter: segment and parallelogram lights.
+type AreaLight = Or<(With<SegmentLight>, With<ParallelogramLight>)>;
+
 /// Analyses the scene and settings and writes the [`RenderPlan`].
 pub fn analyse_scene(
     mut plan: ResMut<RenderPlan>,
@@ -60,15 +69,13 @@ pub fn analyse_scene(
     meshes: Query<&Mesh>,
     spheres: Query<&Sphere>,
     materials: Query<&Material>,
-    point_lights: Query<&PointLight>,
-    segment_lights: Query<&SegmentLight>,
-    parallelogram_lights: Query<&ParallelogramLight>,
+    lights: Query<(), AnyLight>,
+    area_lights: Query<(), AreaLight>,
 ) {
     let s = &*settings;
     let triangles: usize = meshes.iter().map(|m| m.data.triangles.len()).sum();
-    let lights =
-        point_lights.iter().len() + segment_lights.iter().len() + parallelogram_lights.iter().len();
-    let area_lights = segment_lights.iter().len() + parallelogram_lights.iter().len();
+    let lights = lights.iter().len();
+    let area_lights = area_lights.iter().len();
     let textured = materials.iter().filter(|m| m.kd_texture.is_some()).count();
     let transparent = materials.iter().filter(|m| m.transparency < 1.0).count();
     let specular = materials
