@@ -1,0 +1,223 @@
+//! Bad input: one clear line naming the file, the entity and the field; never a panic;
+//! a non-zero exit code and no image from the command line.
+
+mod common;
+
+use std::path::PathBuf;
+use std::process::Command;
+
+use common::*;
+
+const GOOD: &str = r#"(
+    camera: (position: (0, 0, 3), look_at: (0, 0, 0), fov_y: 40, width: 8, height: 8),
+    materials: { "m": (kd: (0.5, 0.5, 0.5)) },
+    entities: [
+        Sphere((name: Some("ball"), center: (0, 0, 0), radius: 1, material: "m")),
+        Mesh((name: Some("tri"), material: Some("m"), geometry: Inline(
+            vertices: [(position: (0, 0, 0)), (position: (1, 0, 0)), (position: (0, 1, 0))],
+            triangles: [(0, 1, 2)]))),
+        PointLight((position: (0, 2, 2), color: (1, 1, 1))),
+    ],
+)"#;
+
+fn bad(from: &str, to: &str) -> String {
+    assert!(GOOD.contains(from), "{from} not in the scene");
+    load_error(&GOOD.replacen(from, to, 1))
+}
+
+#[track_caller]
+fn assert_mentions(message: &str, parts: &[&str]) {
+    assert!(!message.contains('\n'), "not one line: {message}");
+    assert!(message.starts_with("tests/bad.ron"), "no file: {message}");
+    for p in parts {
+        assert!(message.contains(p), "{message:?} does not mention {p:?}");
+    }
+}
+
+#[test]
+fn the_good_scene_loads() {
+    load(GOOD);
+}
+
+#[test]
+fn syntax_errors_give_line_and_column() {
+    let m = bad("fov_y: 40,", "fov_y: 40,,");
+    assert_mentions(&m, &["tests/bad.ron:2:"]);
+}
+
+#[test]
+fn unknown_fields_are_errors_with_position() {
+    let m = bad("radius: 1,", "radius: 1, radiuss: 2,");
+    assert_mentions(&m, &["tests/bad.ron:5:", "radiuss"]);
+}
+
+#[test]
+fn type_errors_are_errors_with_position() {
+    let m = bad("radius: 1,", "radius: \"big\",");
+    assert_mentions(&m, &["tests/bad.ron:5:"]);
+}
+
+#[test]
+fn nan_and_infinite_numbers_are_rejected() {
+    assert_mentions(
+        &bad("center: (0, 0, 0)", "center: (0, NaN, 0)"),
+        &["Sphere \"ball\"", "center", "finite"],
+    );
+    assert_mentions(
+        &bad("position: (0, 2, 2)", "position: (0, inf, 2)"),
+        &["PointLight", "position", "finite"],
+    );
+    assert_mentions(
+        &bad("kd: (0.5, 0.5, 0.5)", "kd: (0.5, -inf, 0.5)"),
+        &["material \"m\"", "kd"],
+    );
+}
+
+#[test]
+fn zero_or_negative_radius_is_rejected() {
+    for r in ["0", "-1"] {
+        let m = bad("radius: 1,", &format!("radius: {r},"));
+        assert_mentions(&m, &["Sphere \"ball\"", "radius", "positive"]);
+    }
+}
+
+#[test]
+fn zero_field_of_view_is_rejected() {
+    assert_mentions(&bad("fov_y: 40", "fov_y: 0"), &["camera", "fov_y"]);
+}
+
+#[test]
+fn zero_and_absurd_image_sizes_are_rejected() {
+    assert_mentions(&bad("width: 8", "width: 0"), &["camera", "width"]);
+    assert_mentions(&bad("height: 8", "height: 40000"), &["camera", "height", "32768"]);
+}
+
+#[test]
+fn out_of_range_triangle_indices_are_rejected() {
+    let m = bad("triangles: [(0, 1, 2)]", "triangles: [(0, 1, 3)]");
+    assert_mentions(&m, &["Mesh \"tri\"", "triangles[0]", "out of range"]);
+}
+
+#[test]
+fn unknown_material_names_are_rejected() {
+    let m = bad("material: \"m\"", "material: \"chrome\"");
+    assert_mentions(&m, &["Sphere \"ball\"", "material", "chrome"]);
+}
+
+#[test]
+fn degenerate_cameras_and_settings_are_rejected() {
+    assert_mentions(
+        &bad("look_at: (0, 0, 0)", "look_at: (0, 0, 3)"),
+        &["camera", "look_at"],
+    );
+    assert_mentions(
+        &bad("look_at: (0, 0, 0)", "look_at: (0, 0, 0), up: (0, 0, 1)"),
+        &["camera", "up", "parallel"],
+    );
+    assert_mentions(
+        &bad("materials:", "settings: (gradient: []), materials:"),
+        &["settings", "gradient"],
+    );
+    assert_mentions(
+        &bad("materials:", "settings: (pixel_samples: 0), materials:"),
+        &["settings", "pixel_samples"],
+    );
+    assert_mentions(
+        &bad("kd: (0.5, 0.5, 0.5)", "kd: (0.5, 0.5, 0.5), transparency: 1.5"),
+        &["material \"m\"", "transparency"],
+    );
+    assert_mentions(
+        &bad("kd: (0.5, 0.5, 0.5)", "kd: (0.5, 0.5, 0.5), shininess: -1"),
+        &["material \"m\"", "shininess"],
+    );
+}
+
+/// Runs the real binary in a fresh temporary folder holding `scene.ron`.
+fn run_cli(scene: Option<&str>, args: &[&str]) -> (bool, String, PathBuf) {
+    let dir = std::env::temp_dir().join(format!(
+        "glint-cli-{}-{}",
+        std::process::id(),
+        args.join("_").replace(['/', '.', '='], "")
+    ));
+    let _ = std::fs::remove_dir_all(&dir);
+    std::fs::create_dir_all(&dir).unwrap();
+    if let Some(s) = scene {
+        std::fs::write(dir.join("scene.ron"), s).unwrap();
+    }
+    let out = Command::new(env!("CARGO_BIN_EXE_glint"))
+        .current_dir(&dir)
+        .args(args)
+        .output()
+        .unwrap();
+    let stderr = String::from_utf8_lossy(&out.stderr).into_owned();
+    (out.status.success(), stderr, dir)
+}
+
+#[test]
+fn the_cli_renders_a_good_scene_and_prints_a_summary() {
+    let (ok, stderr, dir) = run_cli(Some(GOOD), &["render", "scene.ron", "-o", "out.png"]);
+    assert!(ok, "{stderr}");
+    assert!(stderr.contains("8x8, 1 spp"), "{stderr}");
+    assert!(stderr.contains("Mrays/s"), "{stderr}");
+    let img = image::open(dir.join("out.png")).unwrap();
+    assert_eq!((img.width(), img.height()), (8, 8));
+    let leftovers: Vec<_> = std::fs::read_dir(&dir)
+        .unwrap()
+        .filter_map(|e| e.ok())
+        .filter(|e| e.file_name().to_string_lossy().ends_with(".tmp"))
+        .collect();
+    assert!(leftovers.is_empty());
+}
+
+#[test]
+fn the_cli_fails_with_one_line_and_keeps_the_old_image() {
+    let broken = GOOD.replacen("radius: 1,", "radius: -1,", 1);
+    let (ok, stderr, dir) = run_cli(Some(&broken), &["render", "scene.ron", "-o", "out.png"]);
+    assert!(!ok);
+    assert_eq!(stderr.lines().count(), 1, "{stderr}");
+    assert!(stderr.starts_with("error: scene.ron: entities[0]"), "{stderr}");
+    assert!(!dir.join("out.png").exists());
+
+    // An existing image survives a failing run untouched.
+    std::fs::write(dir.join("out.png"), b"previous").unwrap();
+    let out = Command::new(env!("CARGO_BIN_EXE_glint"))
+        .current_dir(&dir)
+        .args(["render", "scene.ron", "-o", "out.png"])
+        .output()
+        .unwrap();
+    assert!(!out.status.success());
+    assert_eq!(std::fs::read(dir.join("out.png")).unwrap(), b"previous");
+}
+
+#[test]
+fn the_cli_reports_a_missing_scene_file() {
+    let (ok, stderr, _) = run_cli(None, &["render", "missing.ron"]);
+    assert!(!ok);
+    assert!(stderr.starts_with("error: missing.ron:"), "{stderr}");
+    assert_eq!(stderr.lines().count(), 1);
+}
+
+#[test]
+fn the_cli_rejects_unknown_settings_and_output_formats() {
+    let (ok, stderr, _) = run_cli(Some(GOOD), &["render", "scene.ron", "--set", "shadow=on"]);
+    assert!(!ok);
+    assert!(stderr.contains("unknown setting \"shadow\""), "{stderr}");
+    let (ok, stderr, _) = run_cli(Some(GOOD), &["render", "scene.ron", "-o", "out.jpg"]);
+    assert!(!ok);
+    assert!(stderr.contains("unknown output format"), "{stderr}");
+}
+
+#[test]
+fn info_explains_the_plan() {
+    let (ok, _, dir) = run_cli(Some(GOOD), &["info", "scene.ron"]);
+    assert!(ok);
+    let out = Command::new(env!("CARGO_BIN_EXE_glint"))
+        .current_dir(&dir)
+        .args(["info", "scene.ron", "--set", "shadows=false"])
+        .output()
+        .unwrap();
+    let text = String::from_utf8_lossy(&out.stdout);
+    assert!(text.contains("skipped trace_shadow_rays"), "{text}");
+    assert!(text.contains("shadows are off"), "{text}");
+    assert!(text.contains("runs    build_triangle_bvh"), "{text}");
+}
