@@ -59,7 +59,6 @@ pub fn import_obj(
         triangulate: true,
         ignore_points: true,
         ignore_lines: true,
-        ..Default::default()
     };
     let (models, materials) = tobj::load_obj(path, &load)
         .map_err(|e| asset_err(path, format!("cannot read the OBJ file: {e}")))?;
