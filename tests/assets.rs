@@ -223,10 +223,11 @@ fn fixture_files() -> (String, Vec<u8>, Vec<u8>) {
         views.join(",\n    "),
         accessors.join(",\n    "),
     );
-    // A 4x4 checker of white and cyan: components 0 and 255 are the same in sRGB and
-    // linear, so the RON scene (linear PNG decode) sees the same texels as glTF (sRGB).
-    let img = image::RgbImage::from_fn(4, 4, |x, y| {
-        if (x + y) % 2 == 0 {
+    // A 4x4 checker of white and cyan, 8 texels a cell so bilinear filtering keeps the
+    // edges sharp: components 0 and 255 are the same in sRGB and linear, so the RON scene
+    // (linear PNG decode) sees the same texels as glTF (sRGB).
+    let img = image::RgbImage::from_fn(32, 32, |x, y| {
+        if (x / 8 + y / 8) % 2 == 0 {
             image::Rgb([255, 255, 255])
         } else {
             image::Rgb([0, 255, 255])

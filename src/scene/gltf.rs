@@ -536,7 +536,9 @@ impl<'a> Importer<'a> {
                 let fov = p.yfov().to_degrees();
                 if forward.length() > 0.0 && up.length() > 0.0 && fov > 0.0 && fov < 180.0 {
                     self.report.cameras.push(ImportedCamera {
-                        name: camera.name().unwrap_or("unnamed").to_owned(),
+                        name: camera
+                            .name()
+                            .map_or_else(|| format!("camera {}", camera.index()), str::to_owned),
                         position,
                         look_at: position + forward.normalize(),
                         up: up.normalize(),
