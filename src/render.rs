@@ -66,6 +66,8 @@ pub struct RenderSummary {
     pub seconds: f64,
     /// Statistics of the run.
     pub stats: RenderStats,
+    /// Choices the loader made (automatic camera, default light), shown after the numbers.
+    pub notes: Vec<String>,
 }
 
 impl std::fmt::Display for RenderSummary {
@@ -91,6 +93,9 @@ impl std::fmt::Display for RenderSummary {
                 self.stats.nonfinite_samples
             )?;
         }
+        if !self.notes.is_empty() {
+            write!(f, "; {}", self.notes.join("; "))?;
+        }
         Ok(())
     }
 }
@@ -106,6 +111,9 @@ pub struct Renderer {
 impl Renderer {
     /// Loads a scene file and applies `overrides`.
     pub fn from_file(path: &Path, overrides: &Overrides) -> Result<Self> {
+        if crate::scene::model::is_model_file(path) {
+            return Self::from_model(path, overrides);
+        }
         let mut file = read_scene(path)?;
         overrides.apply(&mut file)?;
         Self::from_scene(&file, path)
@@ -228,6 +236,11 @@ impl Renderer {
             samples,
             seconds: elapsed.as_secs_f64(),
             stats: self.world.resource::<RenderStats>().clone(),
+            notes: self
+                .world
+                .get_resource::<SceneSource>()
+                .map(|s| s.notes.clone())
+                .unwrap_or_default(),
         }
     }
 

@@ -9,6 +9,9 @@ use glam::{Affine3A, EulerRot, Quat, Vec3};
 
 use super::components::*;
 use super::format::*;
+use super::gltf::import_gltf;
+use super::model::ImportOptions;
+use super::obj::import_obj;
 use super::settings::Settings;
 use super::shapes;
 use crate::error::{GlintError, Result};
@@ -27,6 +30,8 @@ pub struct SceneSource {
     pub path: PathBuf,
     /// Non-fatal problems found while loading (each already repaired).
     pub warnings: Vec<String>,
+    /// Choices the loader made for the user (e.g. an automatic camera), for the summary line.
+    pub notes: Vec<String>,
 }
 
 /// Reads and parses a scene file (no validation yet).
@@ -364,6 +369,14 @@ pub fn spawn_scene(world: &mut World, file: &SceneFile, path: &Path) -> Result<(
         })
     };
 
+    // An imported model keeps its own materials unless the entity names one.
+    let import_material = |c: &Check, name: &Option<String>| -> Result<Option<Entity>> {
+        match name {
+            None => Ok(None),
+            Some(_) => material_ref(c, name).map(|m| Some(m.0)),
+        }
+    };
+
     world.spawn((Name::new("camera"), camera));
     for (index, entity) in file.entities.iter().enumerate() {
         match entity {
@@ -375,14 +388,21 @@ pub fn spawn_scene(world: &mut World, file: &SceneFile, path: &Path) -> Result<(
                 let transform = validate_transform(&c, &d.transform)?;
                 let name = Name::new(d.name.clone().unwrap_or_else(|| format!("mesh {index}")));
                 match &d.geometry {
-                    GeometryDesc::Gltf { path: file, .. } | GeometryDesc::Obj { path: file } => {
-                        return Err(c.err(
-                            "geometry",
-                            format!(
-                                "importing {} is not supported yet",
-                                resolve(path, file).display()
-                            ),
-                        ));
+                    GeometryDesc::Gltf { path: file, scene } => {
+                        let options = ImportOptions {
+                            world_from_file: transform.world_from_object,
+                            material: import_material(&c, &d.material)?,
+                            scene: *scene,
+                        };
+                        import_gltf(world, &resolve(path, file), &options, &mut warnings)?;
+                    }
+                    GeometryDesc::Obj { path: file } => {
+                        let options = ImportOptions {
+                            world_from_file: transform.world_from_object,
+                            material: import_material(&c, &d.material)?,
+                            scene: None,
+                        };
+                        import_obj(world, &resolve(path, file), &options, &mut warnings)?;
                     }
                     g => {
                         let data = shape_mesh(&c, g, &mut warnings)?;
@@ -472,6 +492,7 @@ pub fn spawn_scene(world: &mut World, file: &SceneFile, path: &Path) -> Result<(
     world.insert_resource(SceneSource {
         path: path.to_owned(),
         warnings,
+        notes: Vec::new(),
     });
     Ok(())
 }

@@ -2,7 +2,10 @@
 
 pub mod components;
 pub mod format;
+pub mod gltf;
 pub mod load;
+pub mod model;
+pub mod obj;
 pub mod settings;
 pub mod shapes;
 

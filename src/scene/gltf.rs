@@ -1,0 +1,661 @@
+//! glTF 2.0 import (the `gltf` crate): nodes, meshes, materials, cameras and
+//! KHR_lights_punctual lights become glint entities. The material mapping is documented
+//! in docs/materials.md.
+
+use std::collections::HashMap;
+use std::path::Path;
+use std::sync::Arc;
+
+use bevy_ecs::prelude::*;
+use glam::{Affine3A, Mat4, Vec2, Vec3};
+use gltf::khr_lights_punctual::Kind as LightKind;
+use gltf::mesh::Mode;
+use gltf::texture::WrappingMode;
+
+use super::components::*;
+use super::model::{ImportOptions, ImportReport, ImportedCamera, mesh_bounds};
+use super::shapes;
+use crate::error::{GlintError, Result};
+use crate::shade::texture::{Texture, WrapMode};
+
+/// Required extensions glint understands; any other in `extensionsRequired` is refused.
+pub const SUPPORTED_REQUIRED_EXTENSIONS: [&str; 3] = [
+    "KHR_texture_transform",
+    "KHR_lights_punctual",
+    "KHR_materials_emissive_strength",
+];
+
+/// Dielectric reflectance at normal incidence (the glTF metallic-roughness model's F0).
+pub const DIELECTRIC_F0: f32 = 0.04;
+/// Largest shininess the roughness mapping produces (roughness 0).
+pub const MAX_SHININESS: f32 = 10_000.0;
+
+fn asset_err(path: &Path, message: impl Into<String>) -> GlintError {
+    GlintError::Asset {
+        path: path.to_owned(),
+        message: message.into(),
+    }
+}
+
+/// Phong-style material parameters of a glTF metallic-roughness material.
+///
+/// `base` is the base colour factor (linear RGB). Returns `(kd scale, ks, shininess)`:
+/// the diffuse colour is `base * kd_scale`. The share of a metal that is smooth becomes
+/// a coloured mirror (`ks`), the rest stays diffuse in the base colour, since a Whitted
+/// tracer has no glossy reflection to show a rough metal with.
+pub fn metallic_roughness_to_phong(base: Vec3, metallic: f32, roughness: f32) -> (f32, Vec3, f32) {
+    let m = metallic.clamp(0.0, 1.0);
+    let r = roughness.clamp(0.0, 1.0);
+    let f0 = Vec3::splat(DIELECTRIC_F0).lerp(base, m);
+    let ks = f0 * (1.0 - r);
+    let kd_scale = 1.0 - m * (1.0 - r);
+    // Blinn-Phong exponent matching a GGX lobe of alpha = roughness^2 (2/alpha^2 - 2).
+    let alpha = r * r;
+    let shininess = if alpha <= 0.0 {
+        MAX_SHININESS
+    } else {
+        (2.0 / (alpha * alpha) - 2.0).clamp(1.0, MAX_SHININESS)
+    };
+    (kd_scale, ks, shininess)
+}
+
+/// Irradiance-equivalent colour of a punctual light of `intensity` (candela) seen from
+/// `distance`: glint lights have no fall-off, so the inverse-square law is applied once,
+/// at the centre of the imported model.
+pub fn point_light_colour(color: Vec3, intensity: f32, distance: f32) -> Vec3 {
+    color * intensity / (distance * distance).max(1e-12)
+}
+
+fn wrap_mode(m: WrappingMode) -> WrapMode {
+    match m {
+        WrappingMode::ClampToEdge => WrapMode::Clamp,
+        WrappingMode::MirroredRepeat => WrapMode::MirroredRepeat,
+        WrappingMode::Repeat => WrapMode::Repeat,
+    }
+}
+
+/// Converts gltf's decoded image to an `image` crate image (gltf keeps raw bytes).
+fn dynamic_image(data: gltf::image::Data) -> Option<image::DynamicImage> {
+    use gltf::image::Format;
+    use image::{DynamicImage, ImageBuffer};
+    let (w, h) = (data.width, data.height);
+    let u16s = |b: &[u8]| -> Vec<u16> {
+        b.chunks_exact(2)
+            .map(|c| u16::from_ne_bytes([c[0], c[1]]))
+            .collect()
+    };
+    let f32s = |b: &[u8]| -> Vec<f32> {
+        b.chunks_exact(4)
+            .map(|c| f32::from_ne_bytes([c[0], c[1], c[2], c[3]]))
+            .collect()
+    };
+    let p = data.pixels;
+    Some(match data.format {
+        Format::R8 => DynamicImage::ImageLuma8(ImageBuffer::from_raw(w, h, p)?),
+        Format::R8G8 => DynamicImage::ImageLumaA8(ImageBuffer::from_raw(w, h, p)?),
+        Format::R8G8B8 => DynamicImage::ImageRgb8(ImageBuffer::from_raw(w, h, p)?),
+        Format::R8G8B8A8 => DynamicImage::ImageRgba8(ImageBuffer::from_raw(w, h, p)?),
+        Format::R16 => DynamicImage::ImageLuma16(ImageBuffer::from_raw(w, h, u16s(&p))?),
+        Format::R16G16 => DynamicImage::ImageLumaA16(ImageBuffer::from_raw(w, h, u16s(&p))?),
+        Format::R16G16B16 => DynamicImage::ImageRgb16(ImageBuffer::from_raw(w, h, u16s(&p))?),
+        Format::R16G16B16A16 => DynamicImage::ImageRgba16(ImageBuffer::from_raw(w, h, u16s(&p))?),
+        Format::R32G32B32FLOAT => DynamicImage::ImageRgb32F(ImageBuffer::from_raw(w, h, f32s(&p))?),
+        Format::R32G32B32A32FLOAT => {
+            DynamicImage::ImageRgba32F(ImageBuffer::from_raw(w, h, f32s(&p))?)
+        }
+    })
+}
+
+/// The KHR_texture_transform matrix (glTF's uv convention): translation * rotation * scale.
+fn texture_transform(t: &gltf::texture::TextureTransform) -> glam::Affine2 {
+    let [ox, oy] = t.offset();
+    let [sx, sy] = t.scale();
+    let (s, c) = t.rotation().sin_cos();
+    // The extension's rotation matrix is [c s; -s c] (row-major), i.e. columns (c, -s), (s, c).
+    let rotation = glam::Mat2::from_cols(Vec2::new(c, -s), Vec2::new(s, c));
+    glam::Affine2::from_mat2_translation(
+        rotation * glam::Mat2::from_diagonal(Vec2::new(sx, sy)),
+        Vec2::new(ox, oy),
+    )
+}
+
+/// What a primitive needs from its material to build its vertices.
+struct UvChoice {
+    set: u32,
+    transform: Option<glam::Affine2>,
+}
+
+/// Import state: the document, its buffers and the caches that make instancing share data.
+struct Importer<'a> {
+    path: &'a Path,
+    document: &'a gltf::Document,
+    buffers: &'a [gltf::buffer::Data],
+    options: &'a ImportOptions,
+    /// Geometry per (mesh, primitive, mirrored): every node that instances it shares it.
+    meshes: HashMap<(usize, usize, bool), Arc<MeshData>>,
+    /// Object-space bounds per cached mesh.
+    mesh_bounds: HashMap<(usize, usize, bool), (Vec3, Vec3)>,
+    /// Material entity per glTF material index (`None` = the glTF default material).
+    materials: HashMap<Option<usize>, Entity>,
+    /// Decoded base-colour textures per (image, kd scale bits).
+    textures: HashMap<(usize, [u32; 3]), Arc<Texture>>,
+    warned_modes: Vec<usize>,
+    warned_colors: bool,
+    emissive: Vec<String>,
+    lights: Vec<(gltf::khr_lights_punctual::Light<'a>, Affine3A)>,
+    report: ImportReport,
+}
+
+/// Loads a glTF 2.0 file (`.gltf`, `.glb`, embedded) and spawns its scene into `world`.
+pub fn import_gltf(
+    world: &mut World,
+    path: &Path,
+    options: &ImportOptions,
+    warnings: &mut Vec<String>,
+) -> Result<ImportReport> {
+    let bytes = std::fs::read(path).map_err(|source| GlintError::Io {
+        path: path.to_owned(),
+        source,
+    })?;
+    // Check the required extensions first: the crate's own refusal does not name them.
+    let unvalidated = gltf::Gltf::from_slice_without_validation(&bytes)
+        .map_err(|e| asset_err(path, format!("not a valid glTF file: {e}")))?;
+    for ext in unvalidated.extensions_required() {
+        if !SUPPORTED_REQUIRED_EXTENSIONS.contains(&ext) {
+            return Err(asset_err(
+                path,
+                format!("requires the glTF extension {ext}, which glint does not support"),
+            ));
+        }
+    }
+    drop(unvalidated);
+    let gltf::Gltf { document, blob } = gltf::Gltf::from_slice(&bytes)
+        .map_err(|e| asset_err(path, format!("not a valid glTF file: {e}")))?;
+    drop(bytes);
+    let base = path.parent().unwrap_or(Path::new("."));
+    let buffers = gltf::import_buffers(&document, Some(base), blob)
+        .map_err(|e| asset_err(path, format!("cannot read a buffer: {e}")))?;
+
+    let scene = match options.scene {
+        Some(i) => document.scenes().nth(i).ok_or_else(|| {
+            asset_err(
+                path,
+                format!(
+                    "scene {i} does not exist (the file has {})",
+                    document.scenes().len()
+                ),
+            )
+        })?,
+        None => match document
+            .default_scene()
+            .or_else(|| document.scenes().next())
+        {
+            Some(s) => s,
+            None => return Err(asset_err(path, "the file has no scene")),
+        },
+    };
+
+    let mut imp = Importer {
+        path,
+        document: &document,
+        buffers: &buffers,
+        options,
+        meshes: HashMap::new(),
+        mesh_bounds: HashMap::new(),
+        materials: HashMap::new(),
+        textures: HashMap::new(),
+        warned_modes: Vec::new(),
+        warned_colors: false,
+        emissive: Vec::new(),
+        lights: Vec::new(),
+        report: ImportReport::default(),
+    };
+    for node in scene.nodes() {
+        imp.visit(world, &node, Mat4::IDENTITY, warnings)?;
+    }
+    imp.spawn_lights(world, warnings);
+    if !imp.emissive.is_empty() {
+        warnings.push(format!(
+            "{}: emissive material(s) {} imported without emission (glint surfaces do not emit; add a light)",
+            path.display(),
+            imp.emissive.join(", ")
+        ));
+    }
+    let mut report = imp.report;
+    report.unique_triangles = imp
+        .meshes
+        .iter()
+        .filter(|((_, _, mirrored), _)| !mirrored)
+        .map(|(_, m)| m.triangles.len() as u64)
+        .sum();
+    Ok(report)
+}
+
+impl<'a> Importer<'a> {
+    fn visit(
+        &mut self,
+        world: &mut World,
+        node: &gltf::Node<'a>,
+        parent: Mat4,
+        warnings: &mut Vec<String>,
+    ) -> Result<()> {
+        let local = Mat4::from_cols_array_2d(&node.transform().matrix());
+        let file_from_node = parent * local;
+        if !file_from_node.is_finite() {
+            return Err(asset_err(
+                self.path,
+                format!("node {}: transform is not finite", node_label(node)),
+            ));
+        }
+        let world_from_node = self.options.world_from_file * Affine3A::from_mat4(file_from_node);
+        if let Some(mesh) = node.mesh() {
+            self.spawn_mesh(world, node, &mesh, world_from_node, warnings)?;
+        }
+        if let Some(camera) = node.camera() {
+            self.add_camera(&camera, world_from_node, warnings);
+        }
+        if let Some(light) = node.light() {
+            self.lights.push((light, world_from_node));
+        }
+        for child in node.children() {
+            self.visit(world, &child, file_from_node, warnings)?;
+        }
+        Ok(())
+    }
+
+    fn spawn_mesh(
+        &mut self,
+        world: &mut World,
+        node: &gltf::Node<'a>,
+        mesh: &gltf::Mesh<'a>,
+        world_from_object: Affine3A,
+        warnings: &mut Vec<String>,
+    ) -> Result<()> {
+        // A mirroring transform turns counter-clockwise triangles clockwise: reverse them.
+        let mirrored = world_from_object.matrix3.determinant() < 0.0;
+        for primitive in mesh.primitives() {
+            let key = (mesh.index(), primitive.index(), mirrored);
+            if !matches!(
+                primitive.mode(),
+                Mode::Triangles | Mode::TriangleStrip | Mode::TriangleFan
+            ) {
+                if !self.warned_modes.contains(&mesh.index()) {
+                    self.warned_modes.push(mesh.index());
+                    warnings.push(format!(
+                        "{}: mesh {}: point and line primitives skipped (glint draws triangles only)",
+                        self.path.display(),
+                        mesh_label(mesh)
+                    ));
+                }
+                continue;
+            }
+            let data = match self.meshes.get(&key) {
+                Some(d) => d.clone(),
+                None => {
+                    let d = Arc::new(self.read_primitive(mesh, &primitive, mirrored, warnings)?);
+                    self.mesh_bounds.insert(key, mesh_bounds(&d));
+                    self.meshes.insert(key, d.clone());
+                    d
+                }
+            };
+            let material = match self.options.material {
+                Some(e) => e,
+                None => self.material(world, &primitive.material()),
+            };
+            self.report.triangles += data.triangles.len() as u64;
+            self.report
+                .include_box(self.mesh_bounds[&key], world_from_object);
+            world.spawn((
+                Name::new(format!(
+                    "{}/{}#{}",
+                    node_label(node),
+                    mesh_label(mesh),
+                    primitive.index()
+                )),
+                Mesh { data },
+                Transform { world_from_object },
+                MaterialRef(material),
+            ));
+        }
+        Ok(())
+    }
+
+    /// Which texture coordinate set (and transform) the base colour texture reads.
+    fn uv_choice(&self, material: &gltf::Material) -> UvChoice {
+        if self.options.material.is_some() {
+            return UvChoice {
+                set: 0,
+                transform: None,
+            };
+        }
+        match material.pbr_metallic_roughness().base_color_texture() {
+            Some(info) => {
+                let t = info.texture_transform();
+                UvChoice {
+                    set: t
+                        .as_ref()
+                        .and_then(|t| t.tex_coord())
+                        .unwrap_or(info.tex_coord()),
+                    transform: t.as_ref().map(texture_transform),
+                }
+            }
+            None => UvChoice {
+                set: 0,
+                transform: None,
+            },
+        }
+    }
+
+    fn read_primitive(
+        &mut self,
+        mesh: &gltf::Mesh,
+        primitive: &gltf::Primitive,
+        mirrored: bool,
+        warnings: &mut Vec<String>,
+    ) -> Result<MeshData> {
+        let label = format!("mesh {} primitive {}", mesh_label(mesh), primitive.index());
+        let err = |m: &str| asset_err(self.path, format!("{label}: {m}"));
+        let buffers = self.buffers;
+        let reader = primitive.reader(|b| buffers.get(b.index()).map(|d| &d.0[..]));
+        let positions: Vec<Vec3> = reader
+            .read_positions()
+            .ok_or_else(|| err("has no readable POSITION attribute"))?
+            .map(Vec3::from_array)
+            .collect();
+        if let Some(bad) = positions.iter().position(|p| !p.is_finite()) {
+            return Err(err(&format!("POSITION {bad} is not finite")));
+        }
+        let n = positions.len();
+        let normals: Option<Vec<Vec3>> = reader
+            .read_normals()
+            .map(|it| it.map(Vec3::from_array).collect());
+        let uv = self.uv_choice(&primitive.material());
+        let texcoords: Vec<Vec2> = match reader.read_tex_coords(uv.set) {
+            Some(it) => it.into_f32().map(Vec2::from_array).collect(),
+            None => vec![Vec2::ZERO; n],
+        };
+        if normals.as_ref().is_some_and(|v| v.len() != n) || texcoords.len() != n {
+            return Err(err("attribute counts differ from the POSITION count"));
+        }
+        if reader.read_colors(0).is_some() && !self.warned_colors {
+            self.warned_colors = true;
+            warnings.push(format!(
+                "{}: vertex colours (COLOR_0) ignored (glint materials have no per-vertex colour)",
+                self.path.display()
+            ));
+        }
+        let indices: Vec<u32> = match reader.read_indices() {
+            Some(it) => it.into_u32().collect(),
+            None => (0..n as u32).collect(),
+        };
+        if let Some(&bad) = indices.iter().find(|&&i| i as usize >= n) {
+            return Err(err(&format!("index {bad} out of range ({n} vertices)")));
+        }
+        let mut triangles: Vec<[u32; 3]> = match primitive.mode() {
+            Mode::TriangleStrip => (0..indices.len().saturating_sub(2))
+                .map(|i| {
+                    // Every other strip triangle swaps its first two vertices to keep the winding.
+                    if i % 2 == 0 {
+                        [indices[i], indices[i + 1], indices[i + 2]]
+                    } else {
+                        [indices[i + 1], indices[i], indices[i + 2]]
+                    }
+                })
+                .collect(),
+            Mode::TriangleFan => (1..indices.len().saturating_sub(1))
+                .map(|i| [indices[i], indices[i + 1], indices[0]])
+                .collect(),
+            _ => indices
+                .chunks_exact(3)
+                .map(|c| [c[0], c[1], c[2]])
+                .collect(),
+        };
+        // glTF's v runs down the image; glint's runs up. Transform first (glTF convention).
+        let texcoords: Vec<Vec2> = texcoords
+            .into_iter()
+            .map(|t| {
+                let t = uv.transform.map_or(t, |m| m.transform_point2(t));
+                Vec2::new(t.x, 1.0 - t.y)
+            })
+            .collect();
+        let mut data = match normals {
+            Some(normals) => {
+                let derived = shapes::smooth_normals(&positions, &triangles);
+                MeshData {
+                    vertices: (0..n)
+                        .map(|i| Vertex {
+                            position: positions[i],
+                            normal: normals[i].try_normalize().unwrap_or(derived[i]),
+                            texcoord: texcoords[i],
+                        })
+                        .collect(),
+                    triangles: std::mem::take(&mut triangles),
+                }
+            }
+            // The glTF spec asks for flat normals when NORMAL is absent.
+            None => flat_mesh(&positions, &texcoords, &triangles),
+        };
+        if mirrored {
+            for t in &mut data.triangles {
+                t.swap(1, 2);
+            }
+        }
+        Ok(data)
+    }
+
+    fn material(&mut self, world: &mut World, m: &gltf::Material) -> Entity {
+        if let Some(&e) = self.materials.get(&m.index()) {
+            return e;
+        }
+        let name = match (m.name(), m.index()) {
+            (Some(n), _) => n.to_owned(),
+            (None, Some(i)) => format!("material {i}"),
+            (None, None) => "glTF default material".to_owned(),
+        };
+        let pbr = m.pbr_metallic_roughness();
+        let [r, g, b, a] = pbr.base_color_factor();
+        let base = Vec3::new(r, g, b).max(Vec3::ZERO);
+        let (kd_scale, ks, shininess) =
+            metallic_roughness_to_phong(base, pbr.metallic_factor(), pbr.roughness_factor());
+        let transparency = match m.alpha_mode() {
+            gltf::material::AlphaMode::Opaque => 1.0,
+            gltf::material::AlphaMode::Blend => a.clamp(0.0, 1.0),
+            gltf::material::AlphaMode::Mask => {
+                if a >= m.alpha_cutoff().unwrap_or(0.5) {
+                    1.0
+                } else {
+                    0.0
+                }
+            }
+        };
+        if Vec3::from_array(m.emissive_factor()).max_element() > 0.0 {
+            self.emissive.push(format!("\"{name}\""));
+        }
+        let kd = base * kd_scale;
+        let (kd_texture, wrap) = match pbr.base_color_texture() {
+            Some(info) => {
+                let texture = info.texture();
+                let sampler = texture.sampler();
+                let wrap = [wrap_mode(sampler.wrap_s()), wrap_mode(sampler.wrap_t())];
+                (self.texture(texture.source().index(), kd), wrap)
+            }
+            None => (None, [WrapMode::Repeat; 2]),
+        };
+        let e = world
+            .spawn((
+                Name::new(name.clone()),
+                Material {
+                    name,
+                    kd,
+                    ks,
+                    shininess,
+                    transparency,
+                    kd_texture,
+                    wrap,
+                },
+            ))
+            .id();
+        self.materials.insert(m.index(), e);
+        e
+    }
+
+    /// The base colour texture times `scale` (the factor and the metallic share), decoded
+    /// from sRGB once per (image, scale). An image that cannot be decoded is reported as a
+    /// missing texture: the material keeps its plain colour.
+    fn texture(&mut self, image: usize, scale: Vec3) -> Option<TextureSource> {
+        let key = (image, scale.to_array().map(f32::to_bits));
+        if let Some(t) = self.textures.get(&key) {
+            return Some(TextureSource::Decoded(t.clone()));
+        }
+        let source = self.document.images().nth(image)?.source();
+        let base = self.path.parent().unwrap_or(Path::new("."));
+        let data = gltf::image::Data::from_source(source, Some(base), self.buffers).ok()?;
+        let mut texture = Texture::from_image(&dynamic_image(data)?, true);
+        if scale != Vec3::ONE {
+            for t in &mut texture.texels {
+                *t *= scale;
+            }
+        }
+        let texture = Arc::new(texture);
+        self.textures.insert(key, texture.clone());
+        Some(TextureSource::Decoded(texture))
+    }
+
+    fn add_camera(
+        &mut self,
+        camera: &gltf::Camera,
+        world_from_node: Affine3A,
+        warnings: &mut Vec<String>,
+    ) {
+        match camera.projection() {
+            gltf::camera::Projection::Perspective(p) => {
+                // A glTF camera looks down its node's -z with +y up.
+                let position = world_from_node.transform_point3(Vec3::ZERO);
+                let forward = world_from_node.transform_vector3(Vec3::NEG_Z);
+                let up = world_from_node.transform_vector3(Vec3::Y);
+                let fov = p.yfov().to_degrees();
+                if forward.length() > 0.0 && up.length() > 0.0 && fov > 0.0 && fov < 180.0 {
+                    self.report.cameras.push(ImportedCamera {
+                        name: camera
+                            .name()
+                            .map_or_else(|| format!("camera {}", camera.index()), str::to_owned),
+                        position,
+                        look_at: position + forward.normalize(),
+                        up: up.normalize(),
+                        fov_y_degrees: fov,
+                        aspect_ratio: p.aspect_ratio().filter(|a| a.is_finite() && *a > 0.0),
+                    });
+                }
+            }
+            gltf::camera::Projection::Orthographic(_) => warnings.push(format!(
+                "{}: orthographic camera {} skipped (glint cameras are perspective)",
+                self.path.display(),
+                camera.name().unwrap_or("unnamed")
+            )),
+        }
+    }
+
+    fn spawn_lights(&mut self, world: &mut World, warnings: &mut Vec<String>) {
+        let (centre, radius) = self.report.centre_radius();
+        for (light, world_from_node) in std::mem::take(&mut self.lights) {
+            let color = Vec3::from_array(light.color()).max(Vec3::ZERO);
+            let intensity = light.intensity().max(0.0);
+            let name = light.name().unwrap_or("unnamed").to_owned();
+            let position = world_from_node.transform_point3(Vec3::ZERO);
+            let (position, color) = match light.kind() {
+                LightKind::Point => (
+                    position,
+                    point_light_colour(color, intensity, position.distance(centre)),
+                ),
+                LightKind::Spot { .. } => {
+                    warnings.push(format!(
+                        "{}: spot light \"{name}\" imported as a point light (cone ignored)",
+                        self.path.display()
+                    ));
+                    (
+                        position,
+                        point_light_colour(color, intensity, position.distance(centre)),
+                    )
+                }
+                LightKind::Directional => {
+                    // Lux is already irradiance; a far point light has nearly parallel rays.
+                    let dir = world_from_node
+                        .transform_vector3(Vec3::NEG_Z)
+                        .normalize_or(Vec3::NEG_Y);
+                    warnings.push(format!(
+                        "{}: directional light \"{name}\" imported as a distant point light",
+                        self.path.display()
+                    ));
+                    (centre - dir * radius.max(1e-3) * 1000.0, color * intensity)
+                }
+            };
+            if position.is_finite() && color.is_finite() {
+                world.spawn((Name::new(name), PointLight { position, color }));
+                self.report.lights += 1;
+            }
+        }
+    }
+}
+
+/// One vertex per triangle corner with the face normal (glTF's rule without NORMAL).
+fn flat_mesh(positions: &[Vec3], texcoords: &[Vec2], triangles: &[[u32; 3]]) -> MeshData {
+    let mut vertices = Vec::with_capacity(triangles.len() * 3);
+    for t in triangles {
+        let [a, b, c] = t.map(|i| positions[i as usize]);
+        let normal = (b - a).cross(c - a).normalize_or(Vec3::Z);
+        for &i in t {
+            vertices.push(Vertex {
+                position: positions[i as usize],
+                normal,
+                texcoord: texcoords[i as usize],
+            });
+        }
+    }
+    let triangles = (0..triangles.len() as u32)
+        .map(|i| [3 * i, 3 * i + 1, 3 * i + 2])
+        .collect();
+    MeshData {
+        vertices,
+        triangles,
+    }
+}
+
+fn node_label(node: &gltf::Node) -> String {
+    node.name()
+        .map_or_else(|| format!("node {}", node.index()), str::to_owned)
+}
+
+fn mesh_label(mesh: &gltf::Mesh) -> String {
+    mesh.name()
+        .map_or_else(|| format!("{}", mesh.index()), |n| format!("\"{n}\""))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn mapping_extremes() {
+        let base = Vec3::new(0.8, 0.4, 0.2);
+        // Rough dielectric: diffuse base colour, no specular.
+        let (s, ks, n) = metallic_roughness_to_phong(base, 0.0, 1.0);
+        assert_eq!((s, ks, n), (1.0, Vec3::ZERO, 1.0));
+        // Smooth metal: a mirror in the base colour.
+        let (s, ks, n) = metallic_roughness_to_phong(base, 1.0, 0.0);
+        assert_eq!((s, ks, n), (0.0, base, MAX_SHININESS));
+        // Smooth dielectric: 4 % grey mirror.
+        let (_, ks, _) = metallic_roughness_to_phong(base, 0.0, 0.0);
+        assert_eq!(ks, Vec3::splat(DIELECTRIC_F0));
+        // Half roughness: alpha = 1/4, n = 2/(1/16) - 2 = 30.
+        let (_, _, n) = metallic_roughness_to_phong(base, 0.0, 0.5);
+        assert!((n - 30.0).abs() < 1e-4);
+    }
+
+    #[test]
+    fn rotation_matrix() {
+        // KHR_texture_transform rotates uv (1, 0) by +90 degrees to (0, -1).
+        let (s, c) = std::f32::consts::FRAC_PI_2.sin_cos();
+        let r = glam::Mat2::from_cols(Vec2::new(c, -s), Vec2::new(s, c));
+        assert!((r * Vec2::X).abs_diff_eq(Vec2::new(0.0, -1.0), 1e-6));
+    }
+}
