@@ -89,7 +89,10 @@ fn zero_field_of_view_is_rejected() {
 #[test]
 fn zero_and_absurd_image_sizes_are_rejected() {
     assert_mentions(&bad("width: 8", "width: 0"), &["camera", "width"]);
-    assert_mentions(&bad("height: 8", "height: 40000"), &["camera", "height", "32768"]);
+    assert_mentions(
+        &bad("height: 8", "height: 40000"),
+        &["camera", "height", "32768"],
+    );
 }
 
 #[test]
@@ -123,7 +126,10 @@ fn degenerate_cameras_and_settings_are_rejected() {
         &["settings", "pixel_samples"],
     );
     assert_mentions(
-        &bad("kd: (0.5, 0.5, 0.5)", "kd: (0.5, 0.5, 0.5), transparency: 1.5"),
+        &bad(
+            "kd: (0.5, 0.5, 0.5)",
+            "kd: (0.5, 0.5, 0.5), transparency: 1.5",
+        ),
         &["material \"m\"", "transparency"],
     );
     assert_mentions(
@@ -175,7 +181,10 @@ fn the_cli_fails_with_one_line_and_keeps_the_old_image() {
     let (ok, stderr, dir) = run_cli(Some(&broken), &["render", "scene.ron", "-o", "out.png"]);
     assert!(!ok);
     assert_eq!(stderr.lines().count(), 1, "{stderr}");
-    assert!(stderr.starts_with("error: scene.ron: entities[0]"), "{stderr}");
+    assert!(
+        stderr.starts_with("error: scene.ron: entities[0]"),
+        "{stderr}"
+    );
     assert!(!dir.join("out.png").exists());
 
     // An existing image survives a failing run untouched.

@@ -194,6 +194,8 @@ impl SceneGeometry {
 
     /// Light transmitted along the ray through (0, t_max): the product over every surface
     /// crossed of `(1 - alpha) * (1 - (1 - kd) * alpha)`; zero at the first opaque one.
+    /// A ray through the edge shared by two triangles of one surface hits both at the same
+    /// t; such twins are counted once.
     pub fn transmittance(
         &self,
         ray: &Ray,
@@ -201,44 +203,62 @@ impl SceneGeometry {
         materials: &Materials,
         visitor: &mut impl TraversalVisitor,
     ) -> Vec3 {
-        let mut tint = Vec3::ONE;
-        let mut cross = |material: u32, uv: Vec2| -> bool {
-            let alpha = materials.list[material as usize].alpha;
-            if alpha >= 1.0 {
-                tint = Vec3::ZERO;
-                return true;
-            }
-            let kd = materials.kd_at(material, uv);
-            tint *= (1.0 - alpha) * (Vec3::ONE - (Vec3::ONE - kd) * alpha);
-            tint == Vec3::ZERO
-        };
+        // (t, material, uv) of every transparent surface crossed; opaque ones stop the walk.
+        let mut crossings: Vec<(f32, u32, Vec2)> = Vec::new();
+        let opaque = |material: u32| materials.list[material as usize].alpha >= 1.0;
         if !self.tri_bvh.nodes.is_empty() {
-            let stopped = self.tri_bvh.any_hit(ray, t_max, visitor, |p| {
-                let [a, b, c] = self.tri_positions[p as usize];
-                match intersect_triangle(ray, a, b, c, t_max) {
-                    Some(h) => {
-                        let [ta, tb, tc] = self.tri_texcoords[p as usize];
-                        let uv = h.b0 * ta + h.b1 * tb + h.b2 * tc;
-                        cross(self.tri_material[p as usize], uv)
-                    }
-                    None => false,
+            let blocked = self.tri_bvh.any_hit(ray, t_max, visitor, |p| {
+                let Some(h) = intersect_triangle(
+                    ray,
+                    self.tri_positions[p as usize][0],
+                    self.tri_positions[p as usize][1],
+                    self.tri_positions[p as usize][2],
+                    t_max,
+                ) else {
+                    return false;
+                };
+                let material = self.tri_material[p as usize];
+                if opaque(material) {
+                    return true;
                 }
+                let [ta, tb, tc] = self.tri_texcoords[p as usize];
+                crossings.push((h.t, material, h.b0 * ta + h.b1 * tb + h.b2 * tc));
+                false
             });
-            if stopped {
+            if blocked {
                 return Vec3::ZERO;
             }
         }
         if !self.sphere_bvh.nodes.is_empty() {
-            self.sphere_bvh.any_hit(ray, t_max, visitor, |p| {
+            let blocked = self.sphere_bvh.any_hit(ray, t_max, visitor, |p| {
                 let s = &self.spheres[p as usize];
-                match intersect_sphere(ray, s.center, s.radius, t_max) {
-                    Some(t) => {
-                        let n = (ray.origin + t * ray.dir - s.center) / s.radius;
-                        cross(self.sphere_material[p as usize], sphere_uv(n))
-                    }
-                    None => false,
+                let Some(t) = intersect_sphere(ray, s.center, s.radius, t_max) else {
+                    return false;
+                };
+                let material = self.sphere_material[p as usize];
+                if opaque(material) {
+                    return true;
                 }
+                let n = (ray.origin + t * ray.dir - s.center) / s.radius;
+                crossings.push((t, material, sphere_uv(n)));
+                false
             });
+            if blocked {
+                return Vec3::ZERO;
+            }
+        }
+        crossings.sort_by(|a, b| a.0.total_cmp(&b.0));
+        let mut tint = Vec3::ONE;
+        let mut previous: Option<(f32, u32)> = None;
+        for (t, material, uv) in crossings {
+            let twin = previous.is_some_and(|(pt, pm)| pm == material && t - pt <= 1e-5 * t);
+            previous = Some((t, material));
+            if twin {
+                continue;
+            }
+            let alpha = materials.list[material as usize].alpha;
+            let kd = materials.kd_at(material, uv);
+            tint *= (1.0 - alpha) * (Vec3::ONE - (Vec3::ONE - kd) * alpha);
         }
         tint
     }

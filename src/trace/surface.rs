@@ -97,14 +97,14 @@ pub fn surface_at(
 
 /// A ray origin just off the surface at `p`, on the side of `ng` that `w` points to.
 pub fn offset_ray_origin(p: Vec3, p_error: Vec3, ng: Vec3, w: Vec3) -> Vec3 {
-    let d = ng.abs().dot(p_error);
-    let offset = if w.dot(ng) < 0.0 { -d * ng } else { d * ng };
-    let mut po = p + offset;
-    // Round away from p so the offset survives the addition's own rounding.
+    let side = if w.dot(ng) < 0.0 { -ng } else { ng };
+    let mut po = p + ng.abs().dot(p_error) * side;
+    // Round away from the surface, so the origin leaves it even where the error bound
+    // is zero (a plane through the origin of an axis) and the addition rounds back.
     for i in 0..3 {
-        if offset[i] > 0.0 {
+        if side[i] > 0.0 {
             po[i] = po[i].next_up();
-        } else if offset[i] < 0.0 {
+        } else if side[i] < 0.0 {
             po[i] = po[i].next_down();
         }
     }
