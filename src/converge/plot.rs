@@ -22,7 +22,7 @@ const GLYPH: i32 = 8 * SCALE as i32;
 /// Legend line height.
 const LEGEND_ROW: u32 = 26;
 /// Plot-area margins inside a panel: left, right, top, bottom.
-const MARGIN: (i32, i32, i32, i32) = (110, 24, 44, 76);
+const MARGIN: (i32, i32, i32, i32) = (110, 44, 44, 76);
 
 /// Tableau 10: distinguishable curve colours.
 const PALETTE: [[u8; 3]; 10] = [
@@ -218,7 +218,9 @@ fn draw_panel(img: &mut RgbImage, left: i32, panel: &Panel, curves: &[Curve], y_
         line(img, (x, f64::from(y0)), (x, f64::from(y1)), 1, GRID);
         line(img, (x, f64::from(y1)), (x, f64::from(y1 + 6)), 1, BLACK);
         let s = tick_label(v);
-        text(img, x as i32 - text_width(&s) / 2, y1 + 10, &s, BLACK);
+        // Centred under the tick, but never past the canvas edge.
+        let tx = (x as i32 - text_width(&s) / 2).min(WIDTH as i32 - text_width(&s) - 2);
+        text(img, tx, y1 + 10, &s, BLACK);
     }
     for v in y_axis.labelled() {
         let y = py(v);
@@ -323,6 +325,7 @@ pub fn plot_image(curves: &[Curve]) -> RgbImage {
     }
     // Legend: a swatch, the label and the fitted slopes.
     let mut y = (PANEL_HEIGHT + 16) as i32;
+    let label_len = curves.iter().map(|c| c.label().len()).max().unwrap_or(0);
     for (i, c) in curves.iter().enumerate() {
         let color = curve_color(i);
         let x = 24;
@@ -335,7 +338,7 @@ pub fn plot_image(curves: &[Curve]) -> RgbImage {
         );
         let slope = |s: Option<f64>| s.map_or_else(|| "n/a".into(), |s| format!("{s:+.2}"));
         let label = format!(
-            "{}   slope {} vs time, {} vs spp",
+            "{:<label_len$}   slope {} vs time, {} vs spp",
             c.label(),
             slope(c.slope_time()),
             slope(c.slope_spp())

@@ -16,7 +16,7 @@ pub const CACHE_DIR: &str = ".glint-cache";
 
 /// Mixed into the scene seed so that the reference's random numbers are independent
 /// of the compared configurations' (same seed would correlate their errors).
-const REFERENCE_SEED_SALT: u64 = 0x5EED_0F_4EF3_2E4C;
+const REFERENCE_SEED_SALT: u64 = 0x5EED_0F4E_F32E_4C00;
 
 /// A reference image, linear RGB, row-major.
 #[derive(Clone, Debug)]
