@@ -278,6 +278,9 @@ fn converge(args: &ConvergeArgs) -> Result<Option<Interrupted>> {
     };
     let report = glint::converge::run(&options, &mut |line| eprintln!("{line}"))?;
     print!("{report}");
+    if report.interrupted {
+        eprintln!("interrupted: the table, CSV and plot hold the passes measured so far");
+    }
     Ok(report.interrupted.then_some(Interrupted))
 }
 

@@ -23,6 +23,7 @@ use crate::error::{GlintError, Result};
 use crate::film::write_atomically;
 use crate::render::{Overrides, Renderer};
 use crate::sampling::samples_taken;
+use crate::scene::format::SceneFile;
 use crate::scene::{PixelSampling, parse_scene};
 use metrics::{ImageError, image_error, log_log_slope};
 use reference::{Reference, ReferenceOrigin, cached_reference, read_reference};
@@ -213,6 +214,22 @@ pub fn csv_text(curves: &[Curve]) -> String {
     out
 }
 
+/// The scene with the overrides, then the configuration's settings, applied.
+fn configured_scene(
+    options: &ConvergeOptions,
+    scene_text: &str,
+    settings: &[(String, String)],
+) -> Result<SceneFile> {
+    let mut file = parse_scene(scene_text, &options.scene)?;
+    options.overrides.apply(&mut file)?;
+    for (k, v) in settings {
+        file.settings
+            .set(k, v)
+            .map_err(|e| GlintError::Usage(format!("--compare {e}")))?;
+    }
+    Ok(file)
+}
+
 /// Renders one configuration pass by pass until the budget is spent.
 fn run_configuration(
     options: &ConvergeOptions,
@@ -221,10 +238,7 @@ fn run_configuration(
     reference: &Reference,
     log: &mut dyn FnMut(&str),
 ) -> Result<(Curve, Vec<String>)> {
-    let mut overrides = options.overrides.clone();
-    overrides.set.extend(settings.iter().cloned());
-    let mut file = parse_scene(scene_text, &options.scene)?;
-    overrides.apply(&mut file)?;
+    let file = configured_scene(options, scene_text, settings)?;
     let mut renderer = Renderer::from_scene(&file, &options.scene)?;
     if let Some(flag) = &options.interrupt {
         renderer.set_interrupt(flag.clone());
@@ -290,13 +304,16 @@ fn run_configuration(
             break;
         }
     }
-    log(&format!(
-        "{}: {} spp in {:.2} s, RMSE {:.4e}",
-        curve.label(),
-        sample,
-        seconds,
-        curve.passes.last().map_or(f64::NAN, |p| p.error.rmse)
-    ));
+    match curve.passes.last() {
+        Some(p) => log(&format!(
+            "{}: {} spp in {:.2} s, RMSE {:.4e}",
+            curve.label(),
+            p.spp,
+            p.seconds,
+            p.error.rmse
+        )),
+        None => log(&format!("{}: no complete pass", curve.label())),
+    }
     Ok((curve, warnings))
 }
 
@@ -325,9 +342,8 @@ pub fn run(options: &ConvergeOptions, log: &mut dyn FnMut(&str)) -> Result<Conve
     let configs = configurations(&options.compare);
     // Reject a bad key or value before the (possibly long) reference render.
     for settings in &configs {
-        let mut o = options.overrides.clone();
-        o.set.extend(settings.iter().cloned());
-        o.apply(&mut parse_scene(&scene_text, &options.scene)?)?;
+        let file = configured_scene(options, &scene_text, settings)?;
+        crate::scene::load::validate_settings(&file.settings, &options.scene)?;
     }
     let (reference, origin) = match &options.reference {
         ReferenceSource::File(path) => (
