@@ -3,6 +3,8 @@
 use std::io::IsTerminal;
 use std::path::{Path, PathBuf};
 use std::process::ExitCode;
+use std::sync::Arc;
+use std::sync::atomic::{AtomicBool, Ordering};
 use std::time::Duration;
 
 use clap::{Args, Parser, Subcommand};
@@ -24,6 +26,8 @@ enum Command {
     Render(RenderArgs),
     /// Show what a scene holds and which pipeline stages a render of it runs, and why.
     Info(SceneArgs),
+    /// Measure error against a reference per pass, for configurations at equal time.
+    Converge(ConvergeArgs),
 }
 
 #[derive(Args, Debug)]
@@ -64,6 +68,50 @@ struct RenderArgs {
     /// No progress bar and no summary line.
     #[arg(short, long)]
     quiet: bool,
+}
+
+#[derive(Args, Debug)]
+struct ConvergeArgs {
+    #[command(flatten)]
+    scene: SceneArgs,
+    /// Reference image (EXR, same size as the render).
+    #[arg(long, conflicts_with = "reference_spp")]
+    reference: Option<PathBuf>,
+    /// Render the reference with this many samples per pixel (stratified, rounded to a
+    /// square) and cache it in `.glint-cache/` beside the scene.
+    #[arg(long, default_value_t = 4096)]
+    reference_spp: u32,
+    /// Time budget per configuration (render time only, error measurement excluded).
+    /// Default 10s when --max-spp is absent.
+    #[arg(long, value_parser = parse_duration)]
+    time: Option<Duration>,
+    /// Stop each configuration at this many samples per pixel.
+    #[arg(long)]
+    max_spp: Option<u32>,
+    /// Compare values of a setting, e.g. `--compare shadow_samples=1,4,16`. Several
+    /// flags give the cross product of their values.
+    #[arg(long, value_name = "KEY=V1,V2,...", value_parser = parse_compare)]
+    compare: Vec<(String, Vec<String>)>,
+    /// Write one row per (configuration, measured pass) to this CSV file.
+    #[arg(long)]
+    csv: Option<PathBuf>,
+    /// Plot RMSE against seconds and against spp (log-log) into this PNG.
+    #[arg(long)]
+    plot: Option<PathBuf>,
+    /// Worker threads (default: all cores).
+    #[arg(long)]
+    threads: Option<usize>,
+}
+
+fn parse_compare(s: &str) -> std::result::Result<(String, Vec<String>), String> {
+    let (k, v) = parse_key_value(s)?;
+    let values: Vec<String> = v.split(',').map(|x| x.trim().to_owned()).collect();
+    if values.iter().any(String::is_empty) {
+        return Err(format!(
+            "expected KEY=V1,V2,... with no empty value, got \"{s}\""
+        ));
+    }
+    Ok((k, values))
 }
 
 fn parse_key_value(s: &str) -> std::result::Result<(String, String), String> {
@@ -107,13 +155,35 @@ fn default_output(scene: &Path) -> PathBuf {
     PathBuf::from(format!("{stem}.png"))
 }
 
-fn render(args: &RenderArgs) -> Result<()> {
-    if let Some(n) = args.threads {
+fn set_threads(threads: Option<usize>) -> Result<()> {
+    if let Some(n) = threads {
         rayon::ThreadPoolBuilder::new()
             .num_threads(n.max(1))
             .build_global()
             .map_err(|e| GlintError::Usage(format!("--threads: {e}")))?;
     }
+    Ok(())
+}
+
+/// A flag set by the first Ctrl-C; a second Ctrl-C exits at once.
+fn ctrl_c_flag() -> Result<Arc<AtomicBool>> {
+    let flag = Arc::new(AtomicBool::new(false));
+    let handler_flag = flag.clone();
+    ctrlc::set_handler(move || {
+        if handler_flag.swap(true, Ordering::SeqCst) {
+            std::process::exit(130);
+        }
+        eprintln!("\ninterrupted: finishing the region in flight (Ctrl-C again to quit now)");
+    })
+    .map_err(|e| GlintError::Usage(format!("cannot install the Ctrl-C handler: {e}")))?;
+    Ok(flag)
+}
+
+/// Why `main` exits unsuccessfully although nothing failed.
+struct Interrupted;
+
+fn render(args: &RenderArgs) -> Result<Option<Interrupted>> {
+    set_threads(args.threads)?;
     let output = args
         .output
         .clone()
@@ -132,6 +202,7 @@ fn render(args: &RenderArgs) -> Result<()> {
     for w in renderer.warnings() {
         eprintln!("warning: {w}");
     }
+    renderer.set_interrupt(ctrl_c_flag()?);
     let camera = renderer.camera().expect("a loaded scene has a camera");
     let total = camera.width as u64 * camera.height as u64 * renderer.samples_per_pixel() as u64;
     let bar = if args.quiet || !std::io::stderr().is_terminal() {
@@ -149,16 +220,68 @@ fn render(args: &RenderArgs) -> Result<()> {
     let summary = renderer.render(args.time, &mut |n| bar.inc(n))?;
     bar.finish_and_clear();
     let film = renderer.film();
+    let (least, most) = (
+        film.count.iter().copied().min().unwrap_or(0),
+        film.count.iter().copied().max().unwrap_or(0),
+    );
+    if summary.interrupted && most == 0 {
+        eprintln!("interrupted before the first sample: no image written");
+        return Ok(Some(Interrupted));
+    }
     let encoding = if args.srgb {
         Encoding::Srgb
     } else {
         Encoding::Linear
     };
     write_image(&output, film.width, film.height, &film.image(), encoding)?;
+    if summary.interrupted {
+        // Counts exclude dropped non-finite samples, so state the passes too.
+        let held = if least == most {
+            format!("{least} samples per pixel")
+        } else {
+            format!("{least} to {most} samples per pixel (the last pass was cut short)")
+        };
+        eprintln!(
+            "interrupted: {} holds {held}, {} complete passes of {}",
+            output.display(),
+            summary.samples,
+            renderer.samples_per_pixel()
+        );
+        return Ok(Some(Interrupted));
+    }
     if !args.quiet {
         eprintln!("{}: {summary}", output.display());
     }
-    Ok(())
+    Ok(None)
+}
+
+fn converge(args: &ConvergeArgs) -> Result<Option<Interrupted>> {
+    set_threads(args.threads)?;
+    let options = glint::converge::ConvergeOptions {
+        scene: args.scene.scene.clone(),
+        overrides: overrides(&args.scene),
+        reference: match &args.reference {
+            Some(path) => glint::converge::ReferenceSource::File(path.clone()),
+            None => glint::converge::ReferenceSource::Render {
+                spp: args.reference_spp,
+            },
+        },
+        time: match (args.time, args.max_spp) {
+            (None, None) => Some(Duration::from_secs(10)),
+            (t, _) => t,
+        },
+        max_spp: args.max_spp,
+        compare: args.compare.clone(),
+        csv: args.csv.clone(),
+        plot: args.plot.clone(),
+        interrupt: Some(ctrl_c_flag()?),
+    };
+    let report = glint::converge::run(&options, &mut |line| eprintln!("{line}"))?;
+    print!("{report}");
+    if report.interrupted {
+        eprintln!("interrupted: the table, CSV and plot hold the passes measured so far");
+    }
+    Ok(report.interrupted.then_some(Interrupted))
 }
 
 fn info(args: &SceneArgs) -> Result<()> {
@@ -171,10 +294,13 @@ fn main() -> ExitCode {
     let cli = Cli::parse();
     let result = match &cli.command {
         Command::Render(a) => render(a),
-        Command::Info(a) => info(a),
+        Command::Info(a) => info(a).map(|()| None),
+        Command::Converge(a) => converge(a),
     };
     match result {
-        Ok(()) => ExitCode::SUCCESS,
+        Ok(None) => ExitCode::SUCCESS,
+        // The conventional status of a process stopped by SIGINT.
+        Ok(Some(Interrupted)) => ExitCode::from(130),
         Err(e) => {
             eprintln!("error: {e}");
             ExitCode::FAILURE

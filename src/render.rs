@@ -1,6 +1,8 @@
 //! The render driver: loads a scene into a `World`, runs the schedules, reports.
 
 use std::path::Path;
+use std::sync::Arc;
+use std::sync::atomic::{AtomicBool, Ordering};
 use std::time::{Duration, Instant};
 
 use bevy_ecs::prelude::*;
@@ -68,6 +70,8 @@ pub struct RenderSummary {
     pub stats: RenderStats,
     /// Choices the loader made (automatic camera, default light), shown after the numbers.
     pub notes: Vec<String>,
+    /// Whether the interrupt flag stopped the render before its last pass.
+    pub interrupted: bool,
 }
 
 impl std::fmt::Display for RenderSummary {
@@ -106,6 +110,7 @@ pub struct Renderer {
     pub world: World,
     prepared: bool,
     started: Option<Instant>,
+    interrupt: Option<Arc<AtomicBool>>,
 }
 
 impl Renderer {
@@ -134,6 +139,7 @@ impl Renderer {
             world,
             prepared: false,
             started: None,
+            interrupt: None,
         }
     }
 
@@ -186,14 +192,33 @@ impl Renderer {
         self.take_errors()
     }
 
+    /// Stops renders when `flag` is set (e.g. by Ctrl-C): checked before every
+    /// region, so a region in flight finishes and the film stays consistent.
+    pub fn set_interrupt(&mut self, flag: Arc<AtomicBool>) {
+        self.interrupt = Some(flag);
+    }
+
+    /// Whether the interrupt flag is set.
+    pub fn interrupted(&self) -> bool {
+        self.interrupt
+            .as_ref()
+            .is_some_and(|f| f.load(Ordering::Relaxed))
+    }
+
     /// Traces sample index `sample` for every pixel, region by region; `progress`
-    /// receives the pixels done after each region.
+    /// receives the pixels done after each region. An interrupt leaves the pass
+    /// partial: the first regions hold one sample more than the others.
     pub fn render_pass(&mut self, sample: u32, progress: &mut dyn FnMut(u64)) -> Result<()> {
+        self.trace_pass(sample, progress).map(|_| ())
+    }
+
+    /// [`Renderer::render_pass`], returning whether every region was traced.
+    fn trace_pass(&mut self, sample: u32, progress: &mut dyn FnMut(u64)) -> Result<bool> {
         self.prepare()?;
         let film = self.world.resource::<Film>();
         let pixels = film.width * film.height;
         let mut first = 0;
-        while first < pixels {
+        while first < pixels && !self.interrupted() {
             let count = REGION_PIXELS.min(pixels - first);
             self.world.insert_resource(PassRegion {
                 sample,
@@ -204,10 +229,15 @@ impl Renderer {
             progress(count as u64);
             first += count;
         }
-        self.take_errors()
+        self.take_errors()?;
+        Ok(first == pixels)
     }
 
-    /// Renders every sample of every pixel; stops early after a pass if `budget` is spent.
+    /// Renders every sample of every pixel; stops early after a pass if `budget` is
+    /// spent, or between regions if the interrupt flag is set. Passes are sample
+    /// indices in order, so a uniform-pattern run stopped after m passes (m >= 2)
+    /// equals a run with `pixel_samples = m`; a stratified run stopped early has
+    /// visited only the first m cells of its grid (see docs/convergence.md).
     pub fn render(
         &mut self,
         budget: Option<Duration>,
@@ -218,13 +248,20 @@ impl Renderer {
         let n = self.samples_per_pixel();
         let mut done = 0;
         for sample in 0..n {
-            self.render_pass(sample, progress)?;
+            if self.interrupted() {
+                break;
+            }
+            if !self.trace_pass(sample, progress)? {
+                break;
+            }
             done += 1;
             if budget.is_some_and(|b| start.elapsed() >= b) {
                 break;
             }
         }
-        Ok(self.summary(done, start.elapsed()))
+        let mut summary = self.summary(done, start.elapsed());
+        summary.interrupted = done < n && self.interrupted();
+        Ok(summary)
     }
 
     /// A summary of the run so far.
@@ -241,6 +278,7 @@ impl Renderer {
                 .get_resource::<SceneSource>()
                 .map(|s| s.notes.clone())
                 .unwrap_or_default(),
+            interrupted: false,
         }
     }
 

@@ -1,0 +1,185 @@
+//! The reference image: read from an EXR, or rendered once and cached beside the scene.
+
+use std::path::{Path, PathBuf};
+use std::sync::Arc;
+use std::sync::atomic::AtomicBool;
+
+use glam::Vec3;
+
+use crate::error::{GlintError, Result};
+use crate::film::{Encoding, write_image};
+use crate::render::{Overrides, Renderer};
+use crate::scene::parse_scene;
+
+/// Folder, beside the scene file, that holds cached references.
+pub const CACHE_DIR: &str = ".glint-cache";
+
+/// Mixed into the scene seed so that the reference's random numbers are independent
+/// of the compared configurations' (same seed would correlate their errors).
+const REFERENCE_SEED_SALT: u64 = 0x5EED_0F4E_F32E_4C00;
+
+/// A reference image, linear RGB, row-major.
+#[derive(Clone, Debug)]
+pub struct Reference {
+    /// Width in pixels.
+    pub width: u32,
+    /// Height in pixels.
+    pub height: u32,
+    /// Pixels.
+    pub pixels: Vec<Vec3>,
+}
+
+/// How a reference was obtained.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub enum ReferenceOrigin {
+    /// Read from a file the user supplied.
+    Supplied(PathBuf),
+    /// Read from the cache.
+    Cached(PathBuf),
+    /// Rendered now and written to the cache.
+    Rendered(PathBuf),
+}
+
+/// Reads an image file (EXR or any format `image` decodes) as linear RGB.
+pub fn read_reference(path: &Path) -> Result<Reference> {
+    let img = image::open(path).map_err(|source| GlintError::Image {
+        path: path.to_owned(),
+        source,
+    })?;
+    let rgb = img.into_rgb32f();
+    let (width, height) = rgb.dimensions();
+    let pixels = rgb
+        .pixels()
+        .map(|p| Vec3::new(p.0[0], p.0[1], p.0[2]))
+        .collect();
+    Ok(Reference {
+        width,
+        height,
+        pixels,
+    })
+}
+
+/// FNV-1a, 64 bit: a stable hash (unlike `std`'s, which may change between
+/// releases), good enough to key a cache that is only ever a speed-up.
+fn fnv1a(parts: &[&[u8]]) -> u64 {
+    let mut h: u64 = 0xcbf2_9ce4_8422_2325;
+    for part in parts {
+        // Length-prefix each part so that ("ab", "c") and ("a", "bc") differ.
+        for &b in (part.len() as u64).to_le_bytes().iter().chain(part.iter()) {
+            h ^= u64::from(b);
+            h = h.wrapping_mul(0x0100_0000_01b3);
+        }
+    }
+    h
+}
+
+/// The cache file of a reference: keyed by the scene bytes, the overrides, the
+/// reference spp and the glint version.
+pub fn cache_path(scene: &Path, scene_bytes: &[u8], overrides: &Overrides, spp: u32) -> PathBuf {
+    let settings = format!(
+        "{:?} {:?} {:?} {:?}",
+        overrides.width, overrides.height, overrides.seed, overrides.set
+    );
+    let key = fnv1a(&[
+        scene_bytes,
+        settings.as_bytes(),
+        &spp.to_le_bytes(),
+        env!("CARGO_PKG_VERSION").as_bytes(),
+    ]);
+    let stem = scene.file_stem().unwrap_or_default().to_string_lossy();
+    let dir = scene.parent().unwrap_or(Path::new(""));
+    dir.join(CACHE_DIR).join(format!("{stem}-{key:016x}.exr"))
+}
+
+/// The reference for `scene` at `spp`: the cached file when it exists and has the
+/// expected size, otherwise a render (stratified pixel samples, the scene's other
+/// settings, an independent seed) written to the cache.
+///
+/// Only the scene file's own bytes are hashed: editing a mesh or texture it
+/// references does not invalidate the cache (delete `.glint-cache/` then).
+pub fn cached_reference(
+    scene: &Path,
+    overrides: &Overrides,
+    spp: u32,
+    interrupt: Option<Arc<AtomicBool>>,
+    log: &mut dyn FnMut(&str),
+) -> Result<(Reference, ReferenceOrigin)> {
+    let bytes = std::fs::read(scene).map_err(|source| GlintError::Io {
+        path: scene.to_owned(),
+        source,
+    })?;
+    let path = cache_path(scene, &bytes, overrides, spp);
+    let text = String::from_utf8_lossy(&bytes);
+    let mut file = parse_scene(&text, scene)?;
+    overrides.apply(&mut file)?;
+    let (width, height) = (file.camera.width, file.camera.height);
+    if path.exists() {
+        match read_reference(&path) {
+            Ok(r) if r.width == width && r.height == height => {
+                return Ok((r, ReferenceOrigin::Cached(path)));
+            }
+            _ => log(&format!(
+                "{}: unusable cache entry, rebuilding",
+                path.display()
+            )),
+        }
+    }
+    file.settings.pixel_samples = spp.max(1);
+    file.settings.pixel_sampling = crate::scene::PixelSampling::Stratified;
+    file.settings.seed ^= REFERENCE_SEED_SALT;
+    let mut renderer = Renderer::from_scene(&file, scene)?;
+    if let Some(flag) = interrupt {
+        renderer.set_interrupt(flag);
+    }
+    log(&format!(
+        "rendering the reference: {width}x{height}, {} spp (cached as {})",
+        renderer.samples_per_pixel(),
+        path.display()
+    ));
+    let summary = renderer.render(None, &mut |_| {})?;
+    if summary.interrupted {
+        return Err(GlintError::Usage(
+            "interrupted while rendering the reference; nothing cached".into(),
+        ));
+    }
+    log(&format!("reference done in {:.1} s", summary.seconds));
+    let film = renderer.film();
+    let pixels = film.image();
+    if let Some(dir) = path.parent() {
+        std::fs::create_dir_all(dir).map_err(|source| GlintError::Io {
+            path: dir.to_owned(),
+            source,
+        })?;
+    }
+    write_image(&path, width, height, &pixels, Encoding::Linear)?;
+    Ok((
+        Reference {
+            width,
+            height,
+            pixels,
+        },
+        ReferenceOrigin::Rendered(path),
+    ))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn key_depends_on_every_input() {
+        let scene = Path::new("scenes/box.ron");
+        let o = Overrides::default();
+        let base = cache_path(scene, b"a", &o, 64);
+        assert_eq!(base, cache_path(scene, b"a", &o, 64));
+        assert!(base.starts_with("scenes/.glint-cache"));
+        assert!(base.to_string_lossy().contains("box-"));
+        assert_ne!(base, cache_path(scene, b"b", &o, 64));
+        assert_ne!(base, cache_path(scene, b"a", &o, 65));
+        let o2 = Overrides {
+            set: vec![("shadow_samples".into(), "2".into())],
+            ..Overrides::default()
+        };
+        assert_ne!(base, cache_path(scene, b"a", &o2, 64));
+    }
+}

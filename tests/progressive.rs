@@ -1,0 +1,156 @@
+//! Progressive rendering: a time-budgeted or interrupted render equals a fixed-spp
+//! render with the samples it reached; Ctrl-C on `glint render` writes the image.
+
+use std::path::Path;
+use std::sync::Arc;
+use std::sync::atomic::{AtomicBool, Ordering};
+use std::time::Duration;
+
+use glint::Renderer;
+use glint::scene::parse_scene;
+
+/// A sphere on a floor under a square area light, `size` pixels square.
+fn scene(size: u32, settings: &str) -> String {
+    format!(
+        r#"(
+    camera: (position: (0.0, 1.5, 4.0), look_at: (0.0, 0.5, 0.0), width: {size}, height: {size}),
+    settings: (shading_model: lambertian, background: (0.3, 0.3, 0.3), seed: 9, {settings}),
+    materials: {{ "white": (kd: (0.8, 0.8, 0.8)), "red": (kd: (0.8, 0.2, 0.2)) }},
+    entities: [
+        Mesh((material: Some("white"), geometry: Parallelogram(origin: (-3.0, 0.0, 3.0),
+            edge_u: (6.0, 0.0, 0.0), edge_v: (0.0, 0.0, -6.0)))),
+        Sphere((center: (0.0, 0.6, 0.0), radius: 0.5, material: "red")),
+        ParallelogramLight((v0: (-0.5, 2.5, -0.5), edge01: (1.0, 0.0, 0.0), edge02: (0.0, 0.0, 1.0))),
+    ],
+)"#
+    )
+}
+
+fn renderer(text: &str) -> Renderer {
+    let path = Path::new("progressive.ron");
+    Renderer::from_scene(&parse_scene(text, path).unwrap(), path).unwrap()
+}
+
+/// A fixed render of `spp` uniform samples per pixel.
+fn fixed(size: u32, spp: u32) -> Renderer {
+    let mut r = renderer(&scene(
+        size,
+        &format!("pixel_samples: {spp}, pixel_sampling: uniform"),
+    ));
+    let s = r.render(None, &mut |_| {}).unwrap();
+    assert_eq!(s.samples, spp);
+    assert!(!s.interrupted);
+    r
+}
+
+#[test]
+fn time_budgeted_render_equals_fixed_spp_render() {
+    let mut r = renderer(&scene(16, "pixel_samples: 64, pixel_sampling: uniform"));
+    // Each pass sleeps 20 ms, so a 200 ms budget stops after about ten passes, far
+    // from both 1 (which samples pixel centres) and 64.
+    let summary = r
+        .render(Some(Duration::from_millis(200)), &mut |_| {
+            std::thread::sleep(Duration::from_millis(20))
+        })
+        .unwrap();
+    let m = summary.samples;
+    assert!((2..64).contains(&m), "reached {m} passes");
+    assert!(!summary.interrupted);
+    let reference = fixed(16, m);
+    assert_eq!(r.film(), reference.film(), "{m} spp");
+    assert!(r.film().count.iter().all(|&c| c == m));
+}
+
+#[test]
+fn interrupt_between_passes_keeps_whole_passes() {
+    let mut r = renderer(&scene(32, "pixel_samples: 16, pixel_sampling: uniform"));
+    let flag = Arc::new(AtomicBool::new(false));
+    r.set_interrupt(flag.clone());
+    // 32x32 is one region, so the callback runs once per pass: stop after pass 3.
+    let mut calls = 0;
+    let summary = r
+        .render(None, &mut |_| {
+            calls += 1;
+            if calls == 3 {
+                flag.store(true, Ordering::Relaxed);
+            }
+        })
+        .unwrap();
+    assert!(summary.interrupted);
+    assert_eq!(summary.samples, 3);
+    assert_eq!(r.film(), fixed(32, 3).film());
+}
+
+#[test]
+fn interrupt_between_regions_finishes_the_region_in_flight() {
+    // 260x260 pixels is two regions (65536 + 32064 pixels).
+    let mut r = renderer(&scene(
+        260,
+        "pixel_samples: 8, pixel_sampling: uniform, shadow_samples: 1",
+    ));
+    let flag = Arc::new(AtomicBool::new(false));
+    r.set_interrupt(flag.clone());
+    let mut calls = 0;
+    let summary = r
+        .render(None, &mut |_| {
+            calls += 1;
+            // Pass 1's two regions, then pass 2's first region.
+            if calls == 3 {
+                flag.store(true, Ordering::Relaxed);
+            }
+        })
+        .unwrap();
+    assert!(summary.interrupted);
+    assert_eq!(summary.samples, 1, "complete passes");
+    let count = &r.film().count;
+    let first = glint::render::REGION_PIXELS as usize;
+    assert!(count[..first].iter().all(|&c| c == 2));
+    assert!(count[first..].iter().all(|&c| c == 1));
+}
+
+#[test]
+fn ctrl_c_writes_the_image_so_far() {
+    if std::process::Command::new("kill")
+        .arg("-l")
+        .output()
+        .is_err()
+    {
+        eprintln!("skipped: no `kill` command to send SIGINT");
+        return;
+    }
+    let dir = std::env::temp_dir().join(format!("glint-ctrlc-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let scene_path = dir.join("scene.ron");
+    // Far more samples than the test waits for.
+    std::fs::write(
+        &scene_path,
+        scene(64, "pixel_samples: 65536, pixel_sampling: uniform"),
+    )
+    .unwrap();
+    let output = dir.join("out.exr");
+    let child = std::process::Command::new(env!("CARGO_BIN_EXE_glint"))
+        .arg("render")
+        .arg(&scene_path)
+        .arg("-o")
+        .arg(&output)
+        .stderr(std::process::Stdio::piped())
+        .spawn()
+        .unwrap();
+    std::thread::sleep(Duration::from_millis(1500));
+    let status = std::process::Command::new("kill")
+        .args(["-INT", &child.id().to_string()])
+        .status()
+        .unwrap();
+    assert!(status.success());
+    let out = child.wait_with_output().unwrap();
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert_eq!(out.status.code(), Some(130), "{stderr}");
+    assert!(
+        stderr.contains("holds") && stderr.contains("samples per pixel"),
+        "{stderr}"
+    );
+    let img = image::open(&output).unwrap().into_rgb32f();
+    assert_eq!(img.dimensions(), (64, 64));
+    assert!(img.pixels().any(|p| p.0[0] > 0.0), "the image has samples");
+    std::fs::remove_dir_all(&dir).unwrap();
+}
