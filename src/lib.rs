@@ -8,6 +8,7 @@
 #![warn(missing_docs)]
 
 pub mod accel;
+pub mod debug;
 pub mod error;
 pub mod film;
 pub mod info;

@@ -24,6 +24,16 @@ enum Command {
     Render(RenderArgs),
     /// Show what a scene holds and which pipeline stages a render of it runs, and why.
     Info(SceneArgs),
+    /// Explain one pixel: a debug image of its rays, BVH, lights, texture and samples.
+    Debug(DebugCmd),
+}
+
+#[derive(Args, Debug)]
+struct DebugCmd {
+    #[command(flatten)]
+    scene: SceneArgs,
+    #[command(flatten)]
+    debug: glint::debug::DebugArgs,
 }
 
 #[derive(Args, Debug)]
@@ -172,6 +182,7 @@ fn main() -> ExitCode {
     let result = match &cli.command {
         Command::Render(a) => render(a),
         Command::Info(a) => info(a),
+        Command::Debug(a) => glint::debug::run(&a.scene.scene, &overrides(&a.scene), &a.debug),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,
