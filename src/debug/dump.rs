@@ -42,7 +42,9 @@ pub fn to_ron(request: &DebugRequest, color: Vec3, prims: &[DebugPrimitive]) -> 
             })
             .collect(),
     };
-    let config = ron::ser::PrettyConfig::new().depth_limit(4);
+    let config = ron::ser::PrettyConfig::new()
+        .depth_limit(4)
+        .extensions(ron::extensions::Extensions::IMPLICIT_SOME);
     ron::ser::to_string_pretty(&dump, config)
         .map_err(|e| GlintError::Usage(format!("debug dump: {e}")))
 }

@@ -502,9 +502,12 @@ pub fn emit_lights(
     mut commands: Commands,
     log: Res<DebugTrace>,
     lights: Res<Lights>,
+    settings: Res<Settings>,
     geometry: Res<SceneGeometry>,
 ) {
     let size = scene_size(&geometry);
+    // Area light samples carry colour / sample count; show the light's own colour.
+    let per_sample = settings.shadow_samples.max(1) as f32;
     let mut out = Vec::new();
     let points = lights.points.len() as u32;
     for p in &lights.points {
@@ -575,8 +578,13 @@ pub fn emit_lights(
             arrived: Some(l.arrived),
             ..Default::default()
         };
+        let light_color = if l.light.light >= points {
+            l.light.color * per_sample
+        } else {
+            l.light.color
+        };
         let color = if visible {
-            displayable(l.light.color)
+            displayable(light_color)
         } else {
             BLOCKED
         };
@@ -592,7 +600,7 @@ pub fn emit_lights(
         if l.light.light >= points {
             out.push(prim(
                 Feature::Lights,
-                displayable(l.light.color),
+                displayable(light_color),
                 Shape::Marker {
                     center: l.light.position,
                     radius: size * 0.004,

@@ -41,12 +41,16 @@ use crate::trace::StageErrors;
 use crate::trace::lights::Lights;
 use crate::trace::materials::Materials;
 use crate::trace::plan::RenderPlan;
+use crate::trace::surface::surface_at;
 use crate::trace::wavefront::{PassRegion, camera_ray};
 
 pub use log::DebugTrace;
 pub use overlay::Canvas;
 pub use primitives::{DebugPrimitive, Feature, Shape, Values};
 pub use view::ViewCamera;
+
+/// Brightness of the flat-shaded preview under the background render.
+const PREVIEW_FLOOR: f32 = 0.35;
 
 /// Runs the emitters once after a debug trace.
 #[derive(ScheduleLabel, Clone, Debug, PartialEq, Eq, Hash)]
@@ -94,12 +98,17 @@ pub fn feature_in_scene(
     }
 }
 
+/// The resources a feature's run condition reads.
+type FeatureInputs<'w> = (
+    Option<Res<'w, DebugRequest>>,
+    Res<'w, RenderPlan>,
+    Res<'w, Settings>,
+    Res<'w, Lights>,
+);
+
 /// Run condition: a debug run that asked for `feature`, in a scene where it is on.
-fn wanted(
-    feature: Feature,
-) -> impl FnMut(Option<Res<DebugRequest>>, Res<RenderPlan>, Res<Settings>, Res<Lights>) -> bool + Clone
-{
-    move |request, plan, settings, lights| {
+fn wanted(feature: Feature) -> impl FnMut(FeatureInputs) -> bool + Clone {
+    move |(request, plan, settings, lights): FeatureInputs| {
         request.is_some_and(|r| feature == Feature::Pixel || r.features.contains(&feature))
             && feature_in_scene(feature, &plan, &settings, &lights)
     }
@@ -118,7 +127,7 @@ pub fn debug_emit_schedule() -> Schedule {
             emit_bvh.run_if(wanted(Feature::Bvh)),
             emit_bvh_level
                 .run_if(wanted(Feature::Bvh))
-                .run_if(|r: Res<DebugRequest>| r.bvh_level.is_some()),
+                .run_if(|r: Option<Res<DebugRequest>>| r.is_some_and(|r| r.bvh_level.is_some())),
             emit_textures.run_if(wanted(Feature::Textures)),
             emit_lights.run_if(wanted(Feature::Lights)),
             emit_samples.run_if(wanted(Feature::Samples)),
@@ -286,27 +295,48 @@ impl DebugSession {
         })
     }
 
-    /// View-space depth of the scene at each pixel of `view` (infinite on a miss).
-    pub fn scene_depth(&self, view: &ViewCamera) -> Vec<f32> {
-        let g = self.renderer.world.resource::<SceneGeometry>();
-        let (w, h) = (view.camera.width, view.camera.height);
-        (0..w * h)
+    /// View-space depth of the scene at each pixel of `view` (infinite on a miss), and a
+    /// flat-shaded preview (`kd` by the cosine to the viewer).
+    pub fn scene_view(&self, view: &ViewCamera) -> (Vec<f32>, Vec<Vec3>) {
+        let w = &self.renderer.world;
+        let (g, materials) = (w.resource::<SceneGeometry>(), w.resource::<Materials>());
+        let (width, height) = (view.camera.width, view.camera.height);
+        (0..width * height)
             .into_par_iter()
             .map(|i| {
-                let ray = camera_ray(&view.camera, (i % w) as f32 + 0.5, (i / w) as f32 + 0.5);
-                g.intersect(&ray, f32::INFINITY, &mut ())
-                    .map_or(f32::INFINITY, |hit| view.depth(ray.at(hit.t)))
+                let ray = camera_ray(
+                    &view.camera,
+                    (i % width) as f32 + 0.5,
+                    (i / width) as f32 + 0.5,
+                );
+                match g.intersect(&ray, f32::INFINITY, &mut ()) {
+                    Some(hit) => {
+                        let s = surface_at(g, &ray, &hit, true);
+                        let kd = materials.kd_at(s.material, s.uv);
+                        let cos = s.n.dot(-ray.dir).abs();
+                        (view.depth(s.p), kd * (0.3 + 0.7 * cos))
+                    }
+                    None => (f32::INFINITY, Vec3::ZERO),
+                }
             })
-            .collect()
+            .unzip()
     }
 
-    /// Draws the debug primitives over `background` as seen from `view`.
+    /// Draws the debug primitives over `background` as seen from `view`. Where the
+    /// background is darker than a dim flat-shaded preview (unlit backs of walls, shadows),
+    /// the preview shows through, so the scene's shape stays readable.
     pub fn draw(&mut self, view: &ViewCamera, background: Canvas, depth_test: bool) -> Canvas {
-        let depth = depth_test.then(|| self.scene_depth(view));
+        let (depth, flat) = self.scene_view(view);
+        let depth = depth_test.then_some(depth);
         let prims = self.primitives();
         let refs: Vec<&DebugPrimitive> = prims.iter().collect();
         let textures = self.renderer.world.resource::<Materials>().textures.clone();
         let mut canvas = background;
+        if canvas.pixels.len() == flat.len() {
+            for (p, f) in canvas.pixels.iter_mut().zip(&flat) {
+                *p = p.max(*f * PREVIEW_FLOOR);
+            }
+        }
         overlay::draw_primitives(
             &mut canvas,
             &overlay::OverlayInput {

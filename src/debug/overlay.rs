@@ -198,8 +198,16 @@ impl OverlayInput<'_> {
     }
 }
 
-/// Draws every world-space primitive over `canvas`, then the insets, caption and legend.
+/// Draws every primitive over `canvas`: the world-space ones, then the insets, caption and legend.
 pub fn draw_primitives(canvas: &mut Canvas, input: &OverlayInput, prims: &[&DebugPrimitive]) {
+    draw_world(canvas, input, prims);
+    draw_insets(canvas, input, prims);
+    draw_caption(canvas, prims);
+    draw_legend(canvas, prims);
+}
+
+/// Draws the world-space primitives (boxes, segments, markers, anchored labels) through the view.
+pub fn draw_world(canvas: &mut Canvas, input: &OverlayInput, prims: &[&DebugPrimitive]) {
     // Boxes under rays under markers, so the thin structure does not hide the path.
     for p in prims {
         if let Shape::Box { min, max } = p.shape {
@@ -230,9 +238,6 @@ pub fn draw_primitives(canvas: &mut Canvas, input: &OverlayInput, prims: &[&Debu
             canvas.label(c.x as i32 + 6, c.y as i32 - 4, text, p.color);
         }
     }
-    draw_insets(canvas, input, prims);
-    draw_caption(canvas, prims);
-    draw_legend(canvas, prims);
 }
 
 /// The 12 edges of a box.

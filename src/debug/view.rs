@@ -67,7 +67,7 @@ impl ViewCamera {
     /// The part of segment `a`-`b` beyond the near plane, projected; `None` if all of it is behind.
     pub fn project_segment(&self, a: Vec3, b: Vec3) -> Option<((Vec2, f32), (Vec2, f32))> {
         let (za, zb) = (self.depth(a), self.depth(b));
-        if !(za >= self.near || zb >= self.near) {
+        if za.max(zb).is_nan() || za.max(zb) < self.near {
             return None;
         }
         // Cut at the near plane in world space, so nothing behind the eye is projected.
@@ -86,7 +86,8 @@ impl ViewCamera {
     fn project_on_near(&self, p: Vec3) -> Option<(Vec2, f32)> {
         let v = p - self.camera.position;
         let z = v.dot(self.forward);
-        if !(z > self.near * 0.5) {
+        // NaN fails this test too.
+        if z.partial_cmp(&(self.near * 0.5)) != Some(std::cmp::Ordering::Greater) {
             return None;
         }
         let moved = p + self.forward * (self.near - z);
