@@ -269,7 +269,15 @@ impl DebugSession {
         let bounds = self.framed_bounds();
         match view_from {
             Some(p) => view::view_from(&render, p, bounds, width, height),
-            None => view::auto_view(&render, bounds, width, height),
+            None => {
+                let path: Vec<Vec3> = self
+                    .log()
+                    .rays
+                    .iter()
+                    .filter_map(|r| r.hit.as_ref().map(|(_, s)| s.p - r.ray.origin))
+                    .collect();
+                view::auto_view(&render, bounds, &path, width, height)
+            }
         }
     }
 

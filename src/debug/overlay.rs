@@ -263,7 +263,7 @@ pub fn box_edges(min: Vec3, max: Vec3) -> Vec<(Vec3, Vec3)> {
 /// Panels along the bottom edge, right to left.
 fn draw_insets(canvas: &mut Canvas, input: &OverlayInput, prims: &[&DebugPrimitive]) {
     let mut x = canvas.width as i32 - MARGIN - PANEL;
-    let y = canvas.height as i32 - MARGIN - PANEL - 12;
+    let y = canvas.height as i32 - MARGIN - PANEL;
     for p in prims {
         let drawn = match &p.shape {
             Shape::TexturePanel {
@@ -285,7 +285,7 @@ fn draw_insets(canvas: &mut Canvas, input: &OverlayInput, prims: &[&DebugPrimiti
             _ => false,
         };
         if drawn {
-            canvas.label(x, y + PANEL + 2, p.values.what, Vec3::ONE);
+            canvas.label(x, y - 14, p.values.what, Vec3::ONE);
             x -= PANEL + MARGIN;
             if x < 0 {
                 break;

@@ -100,18 +100,43 @@ impl ViewCamera {
     }
 }
 
-/// An oblique viewpoint: the render camera's direction to the framed region turned by
-/// about 35 degrees around its up axis and raised, far enough to frame `bounds`.
-pub fn auto_view(render: &Camera, bounds: Aabb, width: u32, height: u32) -> ViewCamera {
+/// An oblique viewpoint framing `bounds`: the render camera's direction to them turned
+/// around its up axis and raised. Of a few such directions, the one that sees the
+/// `path` segments (world-space vectors) most from the side wins, so rays do not
+/// collapse towards points.
+pub fn auto_view(
+    render: &Camera,
+    bounds: Aabb,
+    path: &[Vec3],
+    width: u32,
+    height: u32,
+) -> ViewCamera {
     let center = bounds.centroid();
     let radius = (bounds.extent().length() * 0.5).max(1e-3);
     let up = render.up.normalize_or(Vec3::Y);
     let back = (render.position - center).normalize_or(Vec3::Z);
-    let turn = glam::Quat::from_axis_angle(up, 35f32.to_radians());
-    let mut dir = (turn * back + up * 0.45).normalize_or(Vec3::Z);
-    if dir.cross(up).length() < 1e-3 {
-        dir = (dir + up.any_orthonormal_vector() * 0.5).normalize();
+    let side_on = |dir: Vec3| -> f32 { path.iter().map(|s| s.cross(dir).length()).sum() };
+    let mut best: Option<(f32, Vec3)> = None;
+    for (yaw, lift) in [
+        (35.0f32, 0.45),
+        (-35.0, 0.45),
+        (55.0, 0.3),
+        (-55.0, 0.3),
+        (30.0, 1.0),
+        (-30.0, 1.0),
+    ] {
+        let turn = glam::Quat::from_axis_angle(up, yaw.to_radians());
+        let mut dir = (turn * back + up * lift).normalize_or(Vec3::Z);
+        if dir.cross(up).length() < 1e-3 {
+            dir = (dir + up.any_orthonormal_vector() * 0.5).normalize();
+        }
+        let score = side_on(dir);
+        // Keep the first candidate unless another is clearly better.
+        if best.is_none_or(|(s, _)| score > s * 1.15) {
+            best = Some((score, dir));
+        }
     }
+    let dir = best.map_or(back, |(_, d)| d);
     view_from(render, center + dir * radius * 3.0, bounds, width, height)
 }
 
