@@ -281,7 +281,7 @@ impl DebugSession {
         }
     }
 
-    /// A fast render of the scene from `view` (1 sample per pixel, 1 shadow sample).
+    /// A fast render of the scene from `view` (1 sample per pixel, at most 4 shadow samples).
     pub fn background(&self, view: &ViewCamera) -> Result<Canvas> {
         let mut file = self.scene.clone();
         let c = &view.camera;
@@ -292,7 +292,7 @@ impl DebugSession {
         file.camera.width = c.width;
         file.camera.height = c.height;
         file.settings.pixel_samples = 1;
-        file.settings.shadow_samples = 1;
+        file.settings.shadow_samples = file.settings.shadow_samples.min(4);
         let mut r = Renderer::from_scene(&file, &self.path)?;
         r.render(None, &mut |_| {})?;
         let film = r.film();
