@@ -9,6 +9,7 @@
 
 pub mod accel;
 pub mod converge;
+pub mod debug;
 pub mod error;
 pub mod film;
 pub mod info;

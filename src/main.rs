@@ -28,6 +28,16 @@ enum Command {
     Info(SceneArgs),
     /// Measure error against a reference per pass, for configurations at equal time.
     Converge(ConvergeArgs),
+    /// Explain one pixel: a debug image of its rays, BVH, lights, texture and samples.
+    Debug(DebugCmd),
+}
+
+#[derive(Args, Debug)]
+struct DebugCmd {
+    #[command(flatten)]
+    scene: SceneArgs,
+    #[command(flatten)]
+    debug: glint::debug::DebugArgs,
 }
 
 #[derive(Args, Debug)]
@@ -296,6 +306,9 @@ fn main() -> ExitCode {
         Command::Render(a) => render(a),
         Command::Info(a) => info(a).map(|()| None),
         Command::Converge(a) => converge(a),
+        Command::Debug(a) => {
+            glint::debug::run(&a.scene.scene, &overrides(&a.scene), &a.debug).map(|()| None)
+        }
     };
     match result {
         Ok(None) => ExitCode::SUCCESS,

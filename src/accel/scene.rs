@@ -142,6 +142,7 @@ impl SceneGeometry {
         let mut best: Option<Hit> = None;
         let mut t_max = t_max;
         if !self.tri_bvh.nodes.is_empty() {
+            visitor.begin_hierarchy(PrimKind::Triangle);
             let shear = RayShear::new(ray);
             let found = self.tri_bvh.closest_hit(ray, t_max, visitor, |p, tm| {
                 let [a, b, c] = self.tri_positions[p as usize];
@@ -162,6 +163,7 @@ impl SceneGeometry {
             }
         }
         if !self.sphere_bvh.nodes.is_empty() {
+            visitor.begin_hierarchy(PrimKind::Sphere);
             let found = self.sphere_bvh.closest_hit(ray, t_max, visitor, |p, tm| {
                 let s = &self.spheres[p as usize];
                 intersect_sphere(ray, s.center, s.radius, tm)

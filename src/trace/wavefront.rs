@@ -10,13 +10,14 @@ use bevy_ecs::prelude::*;
 use glam::Vec3;
 use rayon::prelude::*;
 
-use super::lights::Lights;
+use super::lights::{LightSample, Lights};
 use super::materials::Materials;
 use super::plan::RenderPlan;
 use super::stats::RenderStats;
 use super::surface::{SHADOW_EPSILON, Surface, surface_at};
 use crate::accel::Ray;
 use crate::accel::scene::SceneGeometry;
+use crate::debug::log::{DebugTrace, TraversalLog};
 use crate::sampling::{Sampler, pixel_sample_offset, samples_taken};
 use crate::scene::{Camera, Settings};
 use crate::shade::{Shading, ShadingInput};
@@ -101,6 +102,7 @@ pub fn generate_camera_samples(
     region: Res<PassRegion>,
     mut wf: ResMut<Wavefront>,
     mut stats: ResMut<RenderStats>,
+    debug: Option<ResMut<DebugTrace>>,
 ) {
     let Some(camera) = cameras.iter().next() else {
         return;
@@ -109,16 +111,19 @@ pub fn generate_camera_samples(
     let n = samples_taken(settings.pixel_samples, settings.pixel_sampling);
     let (mode, patterns) = (settings.pixel_sampling, plan.pixel_patterns);
     let width = camera.width;
+    let offset_of = |slot: u32| {
+        if patterns {
+            pixel_sample_offset(&sampler, region.first_pixel + slot, region.sample, n, mode)
+        } else {
+            glam::Vec2::splat(0.5)
+        }
+    };
     let rays: Vec<QueuedRay> = (0..region.pixels)
         .into_par_iter()
         .with_min_len(CHUNK)
         .map(|slot| {
             let pixel = region.first_pixel + slot;
-            let offset = if patterns {
-                pixel_sample_offset(&sampler, pixel, region.sample, n, mode)
-            } else {
-                glam::Vec2::splat(0.5)
-            };
+            let offset = offset_of(slot);
             let (x, y) = ((pixel % width) as f32, (pixel / width) as f32);
             QueuedRay {
                 ray: camera_ray(camera, x + offset.x, y + offset.y),
@@ -128,6 +133,9 @@ pub fn generate_camera_samples(
             }
         })
         .collect();
+    if let Some(mut log) = debug {
+        log.record_camera_samples(region.sample, &rays, offset_of);
+    }
     stats.record("generate_camera_samples", rays.len() as u64);
     stats.rays.camera += rays.len() as u64;
     wf.depth = 0;
@@ -141,18 +149,38 @@ pub fn intersect_rays(
     geometry: Res<SceneGeometry>,
     mut wf: ResMut<Wavefront>,
     mut stats: ResMut<RenderStats>,
+    debug: Option<ResMut<DebugTrace>>,
 ) {
     let interpolate = settings.normal_interpolation;
-    let hits = wf
-        .rays
-        .par_iter()
-        .with_min_len(CHUNK)
-        .map(|q| {
-            geometry
-                .intersect(&q.ray, f32::INFINITY, &mut ())
-                .map(|h| surface_at(&geometry, &q.ray, &h, interpolate))
-        })
-        .collect();
+    let hits = match debug {
+        None => wf
+            .rays
+            .par_iter()
+            .with_min_len(CHUNK)
+            .map(|q| {
+                geometry
+                    .intersect(&q.ray, f32::INFINITY, &mut ())
+                    .map(|h| surface_at(&geometry, &q.ray, &h, interpolate))
+            })
+            .collect(),
+        // The same query, with a visitor that records the traversal.
+        Some(mut log) => {
+            let traced: Vec<_> = wf
+                .rays
+                .iter()
+                .map(|q| {
+                    let mut visits = TraversalLog::default();
+                    let hit = geometry
+                        .intersect(&q.ray, f32::INFINITY, &mut visits)
+                        .map(|h| (h, surface_at(&geometry, &q.ray, &h, interpolate)));
+                    (hit, visits)
+                })
+                .collect();
+            let hits = traced.iter().map(|(h, _)| h.map(|(_, s)| s)).collect();
+            log.record_rays(wf.depth, &wf.rays, traced);
+            hits
+        }
+    };
     wf.hits = hits;
     stats.record("intersect_rays", wf.rays.len() as u64);
 }
@@ -166,8 +194,80 @@ pub fn blend_alpha(settings: &Settings, alpha: f32, depth: u32) -> f32 {
     }
 }
 
+/// What shading one hit needs besides the ray and its hit.
+struct ShadeContext<'a> {
+    settings: &'a Settings,
+    shading: Shading<'a>,
+    sampler: Sampler,
+    lights: &'a Lights,
+    materials: &'a Materials,
+    region: &'a PassRegion,
+    depth: u32,
+    queue_shadows: bool,
+}
+
+/// Direct light at ray `i`'s hit (or the background on a miss) and its shadow rays;
+/// `seen(sample, contribution, shadow ray index within this ray's list)` observes every
+/// light sample (a no-op in a render, the trace log in a debug run).
+fn shade_ray(
+    cx: &ShadeContext,
+    i: usize,
+    q: &QueuedRay,
+    hit: &Option<Surface>,
+    mut seen: impl FnMut(LightSample, Vec3, Option<u32>),
+) -> (Vec3, Vec<ShadowRay>) {
+    let s = cx.settings;
+    let Some(surface) = hit else {
+        return (q.weight * s.background, Vec::new());
+    };
+    let m = &cx.materials.list[surface.material as usize];
+    let w = q.weight * blend_alpha(s, m.alpha, cx.depth);
+    let kd = cx.materials.kd_at(surface.material, surface.uv);
+    let v = -q.ray.dir.normalize();
+    let mut direct = Vec3::ZERO;
+    let mut shadows = Vec::new();
+    let key = (
+        cx.region.first_pixel + q.slot,
+        cx.region.sample,
+        cx.depth,
+        q.path,
+    );
+    cx.lights
+        .for_each_sample(&cx.sampler, key, s.shadow_samples, |ls| {
+            let Some(l) = (ls.position - surface.p).try_normalize() else {
+                return;
+            };
+            let c = cx.shading.shade(&ShadingInput {
+                n: surface.n,
+                l,
+                v,
+                light_color: ls.color,
+                kd,
+                ks: m.ks,
+                shininess: m.shininess,
+            }) * w;
+            if c == Vec3::ZERO {
+                seen(ls, c, None);
+                return;
+            }
+            if cx.queue_shadows {
+                seen(ls, c, Some(shadows.len() as u32));
+                shadows.push(ShadowRay {
+                    ray: surface.shadow_ray_to(ls.position),
+                    contribution: c,
+                    owner: i as u32,
+                });
+            } else {
+                seen(ls, c, None);
+                direct += c;
+            }
+        });
+    (direct, shadows)
+}
+
 /// Shades every hit: direct light from every light sample, either added at once
 /// (shadows off) or queued as shadow rays; misses get the background.
+#[allow(clippy::too_many_arguments)] // Because each is a resource the stage reads.
 pub fn shade_hits(
     settings: Res<Settings>,
     plan: Res<RenderPlan>,
@@ -176,63 +276,48 @@ pub fn shade_hits(
     region: Res<PassRegion>,
     mut wf: ResMut<Wavefront>,
     mut stats: ResMut<RenderStats>,
+    debug: Option<ResMut<DebugTrace>>,
 ) {
     let s = &*settings;
-    let sampler = Sampler::new(s.seed);
-    let shading = Shading {
-        enabled: s.shading,
-        model: s.shading_model,
-        gradient: &s.gradient,
-        comparison_gradient: &s.comparison_gradient,
+    let cx = ShadeContext {
+        settings: s,
+        shading: Shading {
+            enabled: s.shading,
+            model: s.shading_model,
+            gradient: &s.gradient,
+            comparison_gradient: &s.comparison_gradient,
+        },
+        sampler: Sampler::new(s.seed),
+        lights: &lights,
+        materials: &materials,
+        region: &region,
+        depth: wf.depth,
+        queue_shadows: plan.shadow_rays,
     };
-    let queue_shadows = plan.shadow_rays;
-    let depth = wf.depth;
-    let results: Vec<(Vec3, Vec<ShadowRay>)> = wf
-        .rays
-        .par_iter()
-        .zip(wf.hits.par_iter())
-        .enumerate()
-        .with_min_len(CHUNK)
-        .map(|(i, (q, hit))| {
-            let Some(surface) = hit else {
-                return (q.weight * s.background, Vec::new());
-            };
-            let m = &materials.list[surface.material as usize];
-            let w = q.weight * blend_alpha(s, m.alpha, depth);
-            let kd = materials.kd_at(surface.material, surface.uv);
-            let v = -q.ray.dir.normalize();
-            let mut direct = Vec3::ZERO;
-            let mut shadows = Vec::new();
-            let key = (region.first_pixel + q.slot, region.sample, depth, q.path);
-            lights.for_each_sample(&sampler, key, s.shadow_samples, |ls| {
-                let Some(l) = (ls.position - surface.p).try_normalize() else {
-                    return;
-                };
-                let c = shading.shade(&ShadingInput {
-                    n: surface.n,
-                    l,
-                    v,
-                    light_color: ls.color,
-                    kd,
-                    ks: m.ks,
-                    shininess: m.shininess,
-                }) * w;
-                if c == Vec3::ZERO {
-                    return;
-                }
-                if queue_shadows {
-                    shadows.push(ShadowRay {
-                        ray: surface.shadow_ray_to(ls.position),
-                        contribution: c,
-                        owner: i as u32,
-                    });
-                } else {
-                    direct += c;
-                }
-            });
-            (direct, shadows)
-        })
-        .collect();
+    let results: Vec<(Vec3, Vec<ShadowRay>)> = match debug {
+        None => wf
+            .rays
+            .par_iter()
+            .zip(wf.hits.par_iter())
+            .enumerate()
+            .with_min_len(CHUNK)
+            .map(|(i, (q, hit))| shade_ray(&cx, i, q, hit, |_, _, _| {}))
+            .collect(),
+        // The same shading, one ray after another, logging every light sample.
+        Some(mut log) => {
+            log.begin_light_samples();
+            let mut queued = 0u32;
+            let mut results = Vec::with_capacity(wf.rays.len());
+            for (i, (q, hit)) in wf.rays.iter().zip(&wf.hits).enumerate() {
+                let r = shade_ray(&cx, i, q, hit, |ls, c, shadow| {
+                    log.record_light_sample(i, ls, c, shadow.map(|k| queued + k));
+                });
+                queued += r.1.len() as u32;
+                results.push(r);
+            }
+            results
+        }
+    };
     let mut shadow_rays = Vec::new();
     let mut radiance = Vec::with_capacity(results.len());
     for (direct, shadows) in results {
@@ -255,6 +340,7 @@ pub fn trace_shadow_rays(
     materials: Res<Materials>,
     mut wf: ResMut<Wavefront>,
     mut stats: ResMut<RenderStats>,
+    debug: Option<ResMut<DebugTrace>>,
 ) {
     let t_max = 1.0 - SHADOW_EPSILON;
     let transparent = plan.transparent_shadows;
@@ -272,6 +358,9 @@ pub fn trace_shadow_rays(
             }
         })
         .collect();
+    if let Some(mut log) = debug {
+        log.record_shadow_results(&visible);
+    }
     let wf = &mut *wf;
     for (s, c) in wf.shadow_rays.iter().zip(visible) {
         wf.ray_radiance[s.owner as usize] += c;
@@ -281,7 +370,10 @@ pub fn trace_shadow_rays(
 }
 
 /// Adds each ray's radiance into its camera sample, in queue order (deterministic).
-pub fn gather_radiance(mut wf: ResMut<Wavefront>) {
+pub fn gather_radiance(mut wf: ResMut<Wavefront>, debug: Option<ResMut<DebugTrace>>) {
+    if let Some(mut log) = debug {
+        log.record_radiance(&wf.ray_radiance);
+    }
     let wf = &mut *wf;
     for (q, c) in wf.rays.iter().zip(&wf.ray_radiance) {
         wf.sample_radiance[q.slot as usize] += *c;

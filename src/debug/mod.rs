@@ -1,0 +1,489 @@
+//! The visual debug: explains one pixel with debug-primitive entities.
+//!
+//! A debug run is a render of one pixel by the render's own schedules
+//! ([`crate::schedule`]): a [`PassRegion`] of one pixel per sample index, with a
+//! [`DebugTrace`] resource present so the tracing systems log what they do. The
+//! [`DebugEmit`] schedule's emitter systems, one per [`Feature`], then turn that log into
+//! [`DebugPrimitive`] entities, which [`overlay`] draws over a view of the scene from
+//! another viewpoint and [`dump`] writes as RON.
+//!
+//! ```text
+//! DebugEmit (once, after the pixel's samples):
+//!     emit_pixel, emit_reflections?, emit_transparency?, emit_bvh?, emit_bvh_level?,
+//!     emit_textures?, emit_lights?, emit_samples?
+//! ```
+//! A `?` emitter runs only when its feature is on in the scene and asked for.
+
+pub mod dump;
+pub mod emit;
+pub mod log;
+pub mod overlay;
+pub mod primitives;
+pub mod view;
+
+use std::collections::BTreeSet;
+use std::path::{Path, PathBuf};
+
+use bevy_ecs::prelude::*;
+use bevy_ecs::schedule::ScheduleLabel;
+use glam::Vec3;
+use rayon::prelude::*;
+
+use crate::accel::Aabb;
+use crate::accel::scene::SceneGeometry;
+use crate::error::{GlintError, Result};
+use crate::film::{Encoding, write_image};
+use crate::render::{Overrides, Renderer};
+use crate::scene::format::SceneFile;
+use crate::scene::{Acceleration, Settings, read_scene};
+use crate::schedule::RenderPass;
+use crate::trace::StageErrors;
+use crate::trace::lights::Lights;
+use crate::trace::materials::Materials;
+use crate::trace::plan::RenderPlan;
+use crate::trace::surface::surface_at;
+use crate::trace::wavefront::{PassRegion, camera_ray};
+
+pub use log::DebugTrace;
+pub use overlay::Canvas;
+pub use primitives::{DebugPrimitive, Feature, Shape, Values};
+pub use view::ViewCamera;
+
+/// Brightness of the flat-shaded preview under the background render.
+const PREVIEW_FLOOR: f32 = 0.35;
+
+/// Runs the emitters once after a debug trace.
+#[derive(ScheduleLabel, Clone, Debug, PartialEq, Eq, Hash)]
+pub struct DebugEmit;
+
+/// What a debug run explains: the pixel and the features asked for.
+#[derive(Resource, Clone, Debug, PartialEq, Eq)]
+pub struct DebugRequest {
+    /// Pixel `[x, y]` (row 0 at the top).
+    pub pixel: [u32; 2],
+    /// Features asked for (the pixel itself is always shown).
+    pub features: BTreeSet<Feature>,
+    /// Show every BVH node at this level for the whole scene.
+    pub bvh_level: Option<u32>,
+}
+
+impl DebugRequest {
+    /// Every feature, for pixel `(x, y)`.
+    pub fn all(x: u32, y: u32) -> Self {
+        Self {
+            pixel: [x, y],
+            features: Feature::ALL.into_iter().collect(),
+            bvh_level: None,
+        }
+    }
+}
+
+/// Whether `feature` is on in this scene with these settings (decided by the render plan).
+pub fn feature_in_scene(
+    feature: Feature,
+    plan: &RenderPlan,
+    settings: &Settings,
+    lights: &Lights,
+) -> bool {
+    match feature {
+        Feature::Pixel => true,
+        Feature::Reflections => plan.reflections,
+        Feature::Transparency => plan.pass_through,
+        Feature::Bvh => {
+            settings.acceleration == Acceleration::Bvh && (plan.triangle_bvh || plan.sphere_bvh)
+        }
+        Feature::Textures => plan.textures,
+        Feature::Lights => !lights.is_empty(),
+        Feature::Samples => plan.pixel_patterns,
+    }
+}
+
+/// The resources a feature's run condition reads.
+type FeatureInputs<'w> = (
+    Option<Res<'w, DebugRequest>>,
+    Res<'w, RenderPlan>,
+    Res<'w, Settings>,
+    Res<'w, Lights>,
+);
+
+/// Run condition: a debug run that asked for `feature`, in a scene where it is on.
+fn wanted(feature: Feature) -> impl FnMut(FeatureInputs) -> bool + Clone {
+    move |(request, plan, settings, lights): FeatureInputs| {
+        request.is_some_and(|r| feature == Feature::Pixel || r.features.contains(&feature))
+            && feature_in_scene(feature, &plan, &settings, &lights)
+    }
+}
+
+/// The [`DebugEmit`] schedule: every emitter, each behind its feature's run condition,
+/// all behind the presence of a [`DebugTrace`].
+pub fn debug_emit_schedule() -> Schedule {
+    use emit::*;
+    let mut s = Schedule::new(DebugEmit);
+    s.add_systems(
+        (
+            emit_pixel.run_if(wanted(Feature::Pixel)),
+            emit_reflections.run_if(wanted(Feature::Reflections)),
+            emit_transparency.run_if(wanted(Feature::Transparency)),
+            emit_bvh.run_if(wanted(Feature::Bvh)),
+            emit_bvh_level
+                .run_if(wanted(Feature::Bvh))
+                .run_if(|r: Option<Res<DebugRequest>>| r.is_some_and(|r| r.bvh_level.is_some())),
+            emit_textures.run_if(wanted(Feature::Textures)),
+            emit_lights.run_if(wanted(Feature::Lights)),
+            emit_samples.run_if(wanted(Feature::Samples)),
+        )
+            // Because the dump and the legend list primitives in spawn order.
+            .chain()
+            .run_if(resource_exists::<DebugTrace>),
+    );
+    s
+}
+
+/// A traced pixel: the render's world holding the trace log and the debug entities.
+pub struct DebugSession {
+    /// The renderer whose schedules traced the pixel.
+    pub renderer: Renderer,
+    /// The scene, for the background render from the view.
+    scene: SceneFile,
+    /// Where the scene came from (resolves relative paths).
+    path: PathBuf,
+}
+
+impl DebugSession {
+    /// Traces pixel `request.pixel` of `scene` with the render's schedules, then emits the
+    /// debug entities.
+    pub fn trace(scene: &SceneFile, path: &Path, request: DebugRequest) -> Result<Self> {
+        let mut renderer = Renderer::from_scene(scene, path)?;
+        let camera = renderer
+            .camera()
+            .ok_or_else(|| GlintError::Usage("the scene has no camera".into()))?;
+        let [x, y] = request.pixel;
+        if x >= camera.width || y >= camera.height {
+            return Err(GlintError::Usage(format!(
+                "--pixel {x},{y} is outside the {}x{} image",
+                camera.width, camera.height
+            )));
+        }
+        renderer.world.insert_resource(DebugTrace::default());
+        renderer.world.insert_resource(request);
+        renderer.world.add_schedule(debug_emit_schedule());
+        renderer.prepare()?;
+        for sample in 0..renderer.samples_per_pixel() {
+            renderer.world.insert_resource(PassRegion {
+                sample,
+                first_pixel: y * camera.width + x,
+                pixels: 1,
+            });
+            renderer.world.run_schedule(RenderPass);
+        }
+        if let Some(e) = renderer
+            .world
+            .resource_mut::<StageErrors>()
+            .0
+            .drain(..)
+            .next()
+        {
+            return Err(e);
+        }
+        renderer.world.run_schedule(DebugEmit);
+        Ok(Self {
+            renderer,
+            scene: scene.clone(),
+            path: path.to_owned(),
+        })
+    }
+
+    /// The pixel's colour as the debug trace computed it (the film's mean of its samples).
+    pub fn pixel_color(&self) -> Vec3 {
+        let [x, y] = self.request().pixel;
+        self.renderer.film().pixel(x, y)
+    }
+
+    /// The request.
+    pub fn request(&self) -> &DebugRequest {
+        self.renderer.world.resource::<DebugRequest>()
+    }
+
+    /// The trace log.
+    pub fn log(&self) -> &DebugTrace {
+        self.renderer.world.resource::<DebugTrace>()
+    }
+
+    /// Every debug primitive, in spawn order.
+    pub fn primitives(&mut self) -> Vec<DebugPrimitive> {
+        let mut q = self.renderer.world.query::<(Entity, &DebugPrimitive)>();
+        let mut v: Vec<(Entity, DebugPrimitive)> = q
+            .iter(&self.renderer.world)
+            .map(|(e, p)| (e, p.clone()))
+            .collect();
+        v.sort_by_key(|(e, _)| e.index());
+        v.into_iter().map(|(_, p)| p).collect()
+    }
+
+    /// Which of the asked features are off in this scene, for a note to the user.
+    pub fn features_off(&self) -> Vec<Feature> {
+        let w = &self.renderer.world;
+        let (plan, settings, lights) = (
+            w.resource::<RenderPlan>(),
+            w.resource::<Settings>(),
+            w.resource::<Lights>(),
+        );
+        self.request()
+            .features
+            .iter()
+            .copied()
+            .filter(|f| !feature_in_scene(*f, plan, settings, lights))
+            .collect()
+    }
+
+    /// Bounds of the scene and of every point of the traced path (the camera origin excepted).
+    pub fn framed_bounds(&self) -> Aabb {
+        let mut b = self.renderer.world.resource::<SceneGeometry>().bounds();
+        for r in &self.log().rays {
+            if r.depth > 0 {
+                b.grow(r.ray.origin);
+            }
+            if let Some((_, s)) = &r.hit {
+                b.grow(s.p);
+            }
+        }
+        for l in &self.log().lights {
+            b.grow(l.light.position);
+        }
+        if b.is_empty() {
+            let c = self
+                .renderer
+                .world
+                .resource::<DebugTrace>()
+                .camera_samples
+                .first();
+            let o = c.map_or(Vec3::ZERO, |c| c.ray.at(1.0));
+            b = Aabb::new(o - Vec3::ONE, o + Vec3::ONE);
+        }
+        b
+    }
+
+    /// The view camera: from `view_from` if given, else an automatic oblique viewpoint.
+    pub fn view(&mut self, view_from: Option<Vec3>, width: u32, height: u32) -> ViewCamera {
+        let render = self.renderer.camera().expect("checked in trace");
+        let bounds = self.framed_bounds();
+        match view_from {
+            Some(p) => view::view_from(&render, p, bounds, width, height),
+            None => {
+                let path: Vec<Vec3> = self
+                    .log()
+                    .rays
+                    .iter()
+                    .filter_map(|r| r.hit.as_ref().map(|(_, s)| s.p - r.ray.origin))
+                    .collect();
+                view::auto_view(&render, bounds, &path, width, height)
+            }
+        }
+    }
+
+    /// A fast render of the scene from `view` (1 sample per pixel, at most 4 shadow samples).
+    pub fn background(&self, view: &ViewCamera) -> Result<Canvas> {
+        let mut file = self.scene.clone();
+        let c = &view.camera;
+        file.camera.position = c.position;
+        file.camera.look_at = c.look_at;
+        file.camera.up = c.up;
+        file.camera.fov_y = c.fov_y_degrees;
+        file.camera.width = c.width;
+        file.camera.height = c.height;
+        file.settings.pixel_samples = 1;
+        file.settings.shadow_samples = file.settings.shadow_samples.min(4);
+        let mut r = Renderer::from_scene(&file, &self.path)?;
+        r.render(None, &mut |_| {})?;
+        let film = r.film();
+        Ok(Canvas {
+            width: film.width,
+            height: film.height,
+            pixels: film.image(),
+        })
+    }
+
+    /// View-space depth of the scene at each pixel of `view` (infinite on a miss), and a
+    /// flat-shaded preview (`kd` by the cosine to the viewer).
+    pub fn scene_view(&self, view: &ViewCamera) -> (Vec<f32>, Vec<Vec3>) {
+        let w = &self.renderer.world;
+        let (g, materials) = (w.resource::<SceneGeometry>(), w.resource::<Materials>());
+        let (width, height) = (view.camera.width, view.camera.height);
+        (0..width * height)
+            .into_par_iter()
+            .map(|i| {
+                let ray = camera_ray(
+                    &view.camera,
+                    (i % width) as f32 + 0.5,
+                    (i / width) as f32 + 0.5,
+                );
+                match g.intersect(&ray, f32::INFINITY, &mut ()) {
+                    Some(hit) => {
+                        let s = surface_at(g, &ray, &hit, true);
+                        let kd = materials.kd_at(s.material, s.uv);
+                        let cos = s.n.dot(-ray.dir).abs();
+                        (view.depth(s.p), kd * (0.3 + 0.7 * cos))
+                    }
+                    None => (f32::INFINITY, Vec3::ZERO),
+                }
+            })
+            .unzip()
+    }
+
+    /// Draws the debug primitives over `background` as seen from `view`. Where the
+    /// background is darker than a dim flat-shaded preview (unlit backs of walls, shadows),
+    /// the preview shows through, so the scene's shape stays readable.
+    pub fn draw(&mut self, view: &ViewCamera, background: Canvas, depth_test: bool) -> Canvas {
+        let (depth, flat) = self.scene_view(view);
+        let depth = depth_test.then_some(depth);
+        let prims = self.primitives();
+        let refs: Vec<&DebugPrimitive> = prims.iter().collect();
+        let textures = self.renderer.world.resource::<Materials>().textures.clone();
+        let mut canvas = background;
+        if canvas.pixels.len() == flat.len() {
+            for (p, f) in canvas.pixels.iter_mut().zip(&flat) {
+                *p = p.max(*f * PREVIEW_FLOOR);
+            }
+        }
+        overlay::draw_primitives(
+            &mut canvas,
+            &overlay::OverlayInput {
+                view,
+                scene_depth: depth.as_deref(),
+                textures: &textures,
+            },
+            &refs,
+        );
+        canvas
+    }
+
+    /// The debug entities as RON text.
+    pub fn dump_ron(&mut self) -> Result<String> {
+        let prims = self.primitives();
+        dump::to_ron(self.request(), self.pixel_color(), &prims)
+    }
+}
+
+/// Options of `glint debug` beyond the scene's.
+#[derive(clap::Args, Debug, Clone)]
+pub struct DebugArgs {
+    /// The pixel to explain, `X,Y` (row 0 at the top).
+    #[arg(long, value_parser = parse_pixel)]
+    pub pixel: [u32; 2],
+    /// Output image (PNG).
+    #[arg(short, long, default_value = "debug.png")]
+    pub output: PathBuf,
+    /// Features to explain, comma separated: reflections, transparency, bvh, textures,
+    /// lights, samples (default: all that are on in the scene).
+    #[arg(long, value_delimiter = ',', value_parser = parse_feature)]
+    pub features: Option<Vec<Feature>>,
+    /// View the scene from this point, `X,Y,Z` (default: an oblique viewpoint framing the scene and the path).
+    #[arg(long, value_parser = parse_vec3, allow_hyphen_values = true)]
+    pub view_from: Option<Vec3>,
+    /// Size of the debug image, `WxH`.
+    #[arg(long, default_value = "800x600", value_parser = parse_size)]
+    pub view_size: [u32; 2],
+    /// Fade the parts of primitives that the scene hides from the view.
+    #[arg(long)]
+    pub depth_test: bool,
+    /// Also show every BVH node at this level, for the whole scene.
+    #[arg(long)]
+    pub bvh_level: Option<u32>,
+    /// Also write the debug entities as RON to this file.
+    #[arg(long)]
+    pub dump: Option<PathBuf>,
+}
+
+fn parse_numbers<T: std::str::FromStr>(
+    s: &str,
+    sep: char,
+    n: usize,
+    what: &str,
+) -> std::result::Result<Vec<T>, String> {
+    let parts: Vec<&str> = s.split(sep).map(str::trim).collect();
+    let values: Option<Vec<T>> = parts.iter().map(|p| p.parse().ok()).collect();
+    match values {
+        Some(v) if v.len() == n => Ok(v),
+        _ => Err(format!("expected {what}, got \"{s}\"")),
+    }
+}
+
+fn parse_pixel(s: &str) -> std::result::Result<[u32; 2], String> {
+    let v = parse_numbers::<u32>(s, ',', 2, "X,Y")?;
+    Ok([v[0], v[1]])
+}
+
+fn parse_size(s: &str) -> std::result::Result<[u32; 2], String> {
+    let v = parse_numbers::<u32>(&s.to_ascii_lowercase(), 'x', 2, "WxH")?;
+    if v[0] == 0 || v[1] == 0 || v[0] > 8192 || v[1] > 8192 {
+        return Err(format!("the view size must be within 1..8192, got \"{s}\""));
+    }
+    Ok([v[0], v[1]])
+}
+
+fn parse_vec3(s: &str) -> std::result::Result<Vec3, String> {
+    let v = parse_numbers::<f32>(s, ',', 3, "X,Y,Z")?;
+    let p = Vec3::new(v[0], v[1], v[2]);
+    if !p.is_finite() {
+        return Err(format!("expected finite numbers, got \"{s}\""));
+    }
+    Ok(p)
+}
+
+fn parse_feature(s: &str) -> std::result::Result<Feature, String> {
+    Feature::parse(s).ok_or_else(|| {
+        let names: Vec<&str> = Feature::ALL.iter().map(|f| f.name()).collect();
+        format!("unknown feature \"{s}\" (known: {})", names.join(", "))
+    })
+}
+
+/// `glint debug`: traces one pixel, writes the debug image and optionally the dump.
+pub fn run(scene: &Path, overrides: &Overrides, args: &DebugArgs) -> Result<()> {
+    let ext = args.output.extension().and_then(|e| e.to_str());
+    if !ext.is_some_and(|e| e.eq_ignore_ascii_case("png")) {
+        return Err(GlintError::Usage(format!(
+            "{}: the debug image must be a .png",
+            args.output.display()
+        )));
+    }
+    let mut file = read_scene(scene)?;
+    overrides.apply(&mut file)?;
+    let request = DebugRequest {
+        pixel: args.pixel,
+        features: match &args.features {
+            Some(f) => f.iter().copied().collect(),
+            None => Feature::ALL.into_iter().collect(),
+        },
+        bvh_level: args.bvh_level,
+    };
+    let mut session = DebugSession::trace(&file, scene, request)?;
+    if args.features.is_some() {
+        for f in session.features_off() {
+            eprintln!(
+                "note: {} is off in this scene; nothing to show for it",
+                f.name()
+            );
+        }
+    }
+    let [w, h] = args.view_size;
+    let view = session.view(args.view_from, w, h);
+    let background = session.background(&view)?;
+    let canvas = session.draw(&view, background, args.depth_test);
+    write_image(&args.output, w, h, &canvas.pixels, Encoding::Linear)?;
+    if let Some(path) = &args.dump {
+        let text = session.dump_ron()?;
+        crate::film::write_atomically(path, text.as_bytes())?;
+    }
+    let c = session.pixel_color();
+    eprintln!(
+        "{}: pixel {},{} = ({:.4}, {:.4}, {:.4}), {} debug entities",
+        args.output.display(),
+        args.pixel[0],
+        args.pixel[1],
+        c.x,
+        c.y,
+        c.z,
+        session.primitives().len()
+    );
+    Ok(())
+}
