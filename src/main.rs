@@ -42,7 +42,7 @@ struct DebugCmd {
 
 #[derive(Args, Debug)]
 struct SceneArgs {
-    /// The scene file (RON).
+    /// The scene: a RON scene file, or a glTF (.gltf, .glb) or OBJ model rendered directly.
     scene: PathBuf,
     /// Image width in pixels (overrides the scene's camera).
     #[arg(long)]
