@@ -24,6 +24,25 @@ enum Command {
     Render(RenderArgs),
     /// Show what a scene holds and which pipeline stages a render of it runs, and why.
     Info(SceneArgs),
+    /// Run the numerical stress suite (extreme scales, edges, grazing rays, degenerate
+    /// input...) and print a table of measurements; fails if any case fails.
+    Stress(StressArgs),
+}
+
+#[derive(Args, Debug)]
+struct StressArgs {
+    /// Small images and ray counts (what the test suite runs).
+    #[arg(long)]
+    quick: bool,
+    /// Also write the measurements as CSV to this file.
+    #[arg(long, value_name = "FILE")]
+    csv: Option<PathBuf>,
+    /// Run only the cases whose name contains this text.
+    #[arg(long = "case", value_name = "NAME")]
+    case: Option<String>,
+    /// Worker threads (default: all cores).
+    #[arg(long)]
+    threads: Option<usize>,
 }
 
 #[derive(Args, Debug)]
@@ -167,11 +186,26 @@ fn info(args: &SceneArgs) -> Result<()> {
     Ok(())
 }
 
+fn stress(args: &StressArgs) -> Result<()> {
+    if let Some(n) = args.threads {
+        rayon::ThreadPoolBuilder::new()
+            .num_threads(n.max(1))
+            .build_global()
+            .map_err(|e| GlintError::Usage(format!("--threads: {e}")))?;
+    }
+    if glint::stress::run(args.quick, args.csv.as_deref(), args.case.as_deref())? {
+        Ok(())
+    } else {
+        Err(GlintError::Usage("some stress cases failed (see the table)".into()))
+    }
+}
+
 fn main() -> ExitCode {
     let cli = Cli::parse();
     let result = match &cli.command {
         Command::Render(a) => render(a),
         Command::Info(a) => info(a),
+        Command::Stress(a) => stress(a),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,
