@@ -6,6 +6,7 @@ use glam::{Vec2, Vec3};
 
 use super::{
     Aabb, Bvh, Ray, SplitMethod, TraversalVisitor, intersect_sphere, intersect_triangle,
+    sphere::sphere_roots,
     triangle::{RayShear, intersect_triangle_sheared},
 };
 use crate::scene::{Acceleration, BvhSplit, Mesh, Settings, Sphere, Transform};
@@ -231,13 +232,17 @@ impl SceneGeometry {
         if !self.sphere_bvh.nodes.is_empty() {
             self.sphere_bvh.any_hit(ray, t_max, visitor, |p| {
                 let s = &self.spheres[p as usize];
-                match intersect_sphere(ray, s.center, s.radius, t_max) {
-                    Some(t) => {
-                        let n = (ray.origin + t * ray.dir - s.center) / s.radius;
-                        cross(self.sphere_material[p as usize], sphere_uv(n))
+                let Some((t0, t1)) = sphere_roots(ray, s.center, s.radius) else {
+                    return false;
+                };
+                // A sphere is two surfaces: a ray through it crosses both roots.
+                [t0, t1].into_iter().any(|t| {
+                    if !(t > 0.0 && t < t_max) {
+                        return false;
                     }
-                    None => false,
-                }
+                    let n = (ray.origin + t * ray.dir - s.center) / s.radius;
+                    cross(self.sphere_material[p as usize], sphere_uv(n))
+                })
             });
         }
         tint

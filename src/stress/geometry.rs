@@ -176,7 +176,11 @@ fn compare(bvh: &SceneGeometry, brute: &SceneGeometry, rays: &[Ray]) -> (usize, 
             let c = brute.intersect(r, f32::INFINITY, &mut ());
             let differ = match (a, c) {
                 (None, None) => false,
-                (Some(a), Some(c)) => a.t != c.t || a.kind != c.kind,
+                // On a shared edge the two triangles' t may differ by an ulp, and which
+                // one wins depends on the visiting order: equal within rounding.
+                (Some(a), Some(c)) => {
+                    (a.t - c.t).abs() > 4.0 * f32::EPSILON * a.t.max(c.t) || a.kind != c.kind
+                }
                 _ => true,
             };
             (differ as usize, (!finite(&a) || !finite(&c)) as usize)
@@ -257,7 +261,7 @@ pub fn axis_grazing(b: &Budget) -> Vec<Row> {
         ] {
             let (differ, nonfinite) = compare(&bvh, &brute, rays);
             let case = format!("axis/grazing {name}");
-            rows.push(Row::at_most(&case, format!("{kind}: BVH != brute force (of {})", rays.len()), differ as f64, 0.0));
+            rows.push(Row::at_most(&case, format!("{kind}: BVH and brute force disagree (hit/miss, or t beyond 4 ulp) (of {})", rays.len()), differ as f64, 0.0));
             rows.push(Row::at_most(&case, format!("{kind}: non-finite hits"), nonfinite as f64, 0.0));
         }
         // Every grazing ray reaches the floor (or something above it) before t = 1.
@@ -364,7 +368,7 @@ pub fn degenerate(b: &Budget) -> Vec<Row> {
         })
         .reduce(|| (0, 0), |x, y| (x.0 + y.0, x.1 + y.1));
     let n_degenerate = degenerate.iter().filter(|&&d| d).count();
-    rows.push(Row::exactly(case, "zero-area triangles in the loaded scene", n_degenerate as f64, 7.0));
+    rows.push(Row::exactly(case, "zero-area triangles in the loaded scene", n_degenerate as f64, 8.0));
     rows.push(Row::at_most(case, format!("hits reported on zero-area triangles (of {} rays)", rays.len()), hits_on_degenerate as f64, 0.0));
     rows.push(Row::at_most(case, "hits with a non-finite point, normal or uv", nonfinite as f64, 0.0));
     rows

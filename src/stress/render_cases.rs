@@ -340,7 +340,7 @@ pub fn spheres(b: &Budget) -> Vec<Row> {
 /// shadow samples, and radiance overflowing to infinity (dropped and counted by the film).
 pub fn lights(b: &Budget) -> Vec<Row> {
     let mut rows = Vec::new();
-    let floor = rect(Vec3::new(-4.0, 0.0, -4.0), Vec3::Z * 8.0, Vec3::X * 8.0, "floor");
+    let floor = rect(Vec3::new(-50.0, 0.0, -50.0), Vec3::Z * 100.0, Vec3::X * 100.0, "floor");
     let camera = cam(b, Vec3::new(0.0, 3.0, 4.0), Vec3::ZERO, 40.0);
     let lit = |settings: &str, light: &str, kd: f32| {
         scene(
