@@ -196,7 +196,9 @@ fn stress(args: &StressArgs) -> Result<()> {
     if glint::stress::run(args.quick, args.csv.as_deref(), args.case.as_deref())? {
         Ok(())
     } else {
-        Err(GlintError::Usage("some stress cases failed (see the table)".into()))
+        Err(GlintError::Usage(
+            "some stress cases failed (see the table)".into(),
+        ))
     }
 }
 

@@ -36,7 +36,7 @@ pub fn sphere_roots(ray: &Ray, center: glam::Vec3, radius: f32) -> Option<(f32, 
     let perp = f + (b / a) * d;
     let disc = a * (radius * radius - perp.dot(perp));
     // `!(disc >= 0)` also rejects NaN (e.g. a zero direction).
-    if !(disc >= 0.0) {
+    if disc.is_nan() || disc < 0.0 {
         return None;
     }
     let q = b + b.signum() * disc.sqrt();

@@ -166,7 +166,17 @@ pub fn intersect_triangle_sheared(
     // pbrt (3rd ed., 3.9.6) but carries each vertex's own magnitudes through the shear
     // (pbrt's bounds every sheared y by the largest z), so that a ray grazing a surface
     // from even a few ulps away still hits it.
-    if t <= 3.0 * t_error(s, [a, b, c], [ax, ay, bx, by, cx, cy], [u, v, w], [az, bz, cz], t, inv_det) {
+    if t <= 3.0
+        * t_error(
+            s,
+            [a, b, c],
+            [ax, ay, bx, by, cx, cy],
+            [u, v, w],
+            [az, bz, cz],
+            t,
+            inv_det,
+        )
+    {
         return None;
     }
     Some(TriangleHit {
@@ -182,7 +192,15 @@ pub fn intersect_triangle_sheared(
 /// `rel` are the vertices relative to the ray origin, `sheared` their sheared x and y,
 /// `e` the edge functions, `z` the scaled z coordinates.
 #[inline(always)]
-fn t_error(s: &RayShear, rel: [Vec3; 3], sheared: [f32; 6], e: [f32; 3], z: [f32; 3], t: f32, inv_det: f32) -> f32 {
+fn t_error(
+    s: &RayShear,
+    rel: [Vec3; 3],
+    sheared: [f32; 6],
+    e: [f32; 3],
+    z: [f32; 3],
+    t: f32,
+    inv_det: f32,
+) -> f32 {
     let [ax, ay, bx, by, cx, cy] = sheared.map(f32::abs);
     // Errors of the sheared coordinates: the subtraction from the origin, the shear product, the difference.
     let ex = rel.map(|p| gamma(5) * (p[s.kx].abs() + (s.sx * p[s.kz]).abs()));

@@ -49,7 +49,11 @@ fn place(mesh: &MeshData, m: Affine3A) -> Vec<[Vec3; 3]> {
 }
 
 /// Scene geometry over `tris` and `spheres`, with a BVH (`bvh`) or one leaf (brute force).
-pub fn geometry_of(tris: &[[Vec3; 3]], spheres: &[Sphere], bvh: Option<SplitMethod>) -> SceneGeometry {
+pub fn geometry_of(
+    tris: &[[Vec3; 3]],
+    spheres: &[Sphere],
+    bvh: Option<SplitMethod>,
+) -> SceneGeometry {
     let build = |bounds: &[Aabb]| match bvh {
         Some(split) => Bvh::build(bounds, split),
         None => Bvh::single_leaf(bounds),
@@ -57,7 +61,12 @@ pub fn geometry_of(tris: &[[Vec3; 3]], spheres: &[Sphere], bvh: Option<SplitMeth
     let tri_bounds: Vec<Aabb> = tris.iter().map(|p| Aabb::from_points(p)).collect();
     let sphere_bounds: Vec<Aabb> = spheres
         .iter()
-        .map(|s| Aabb::new(s.center - Vec3::splat(s.radius), s.center + Vec3::splat(s.radius)))
+        .map(|s| {
+            Aabb::new(
+                s.center - Vec3::splat(s.radius),
+                s.center + Vec3::splat(s.radius),
+            )
+        })
         .collect();
     SceneGeometry {
         tri_positions: tris.to_vec(),
@@ -118,7 +127,14 @@ fn edge_points(tris: &[[Vec3; 3]], rng: &mut Lcg, count: usize) -> Vec<Vec3> {
 
 /// Rays from outside and inside through edge and vertex points, and random rays from
 /// inside; returns (rays, misses).
-fn closed_mesh_misses(g: &SceneGeometry, tris: &[[Vec3; 3]], centre: Vec3, size: f32, count: usize, seed: u64) -> (usize, usize) {
+fn closed_mesh_misses(
+    g: &SceneGeometry,
+    tris: &[[Vec3; 3]],
+    centre: Vec3,
+    size: f32,
+    count: usize,
+    seed: u64,
+) -> (usize, usize) {
     let mut rng = Lcg(seed);
     let pts = edge_points(tris, &mut rng, count / 3);
     let mut rays = Vec::with_capacity(pts.len() * 3);
@@ -130,7 +146,10 @@ fn closed_mesh_misses(g: &SceneGeometry, tris: &[[Vec3; 3]], centre: Vec3, size:
         // From a random inside point through p.
         let o = centre + (rng.vec() - Vec3::splat(0.5)) * (0.1 * size);
         rays.push(Ray::new(o, p - o));
-        rays.push(Ray::new(centre + (rng.vec() - Vec3::splat(0.5)) * (0.1 * size), rng.dir()));
+        rays.push(Ray::new(
+            centre + (rng.vec() - Vec3::splat(0.5)) * (0.1 * size),
+            rng.dir(),
+        ));
     }
     let misses = rays
         .par_iter()
@@ -143,14 +162,36 @@ fn closed_mesh_misses(g: &SceneGeometry, tris: &[[Vec3; 3]], centre: Vec3, size:
 pub fn watertight(b: &Budget) -> Vec<Row> {
     let mut rows = Vec::new();
     let awkward = |scale: Vec3, off: Vec3| {
-        Affine3A::from_scale_rotation_translation(scale, Quat::from_euler(glam::EulerRot::XYZ, 0.3137, -0.771, 0.0913), off)
+        Affine3A::from_scale_rotation_translation(
+            scale,
+            Quat::from_euler(glam::EulerRot::XYZ, 0.3137, -0.771, 0.0913),
+            off,
+        )
     };
     let off = Vec3::new(0.3137, -1.771, 2.0913);
     let meshes: [(&str, MeshData, Affine3A, Vec3, f32); 3] = [
-        ("icosphere", shapes::icosphere(4), awkward(Vec3::splat(1.37), off), off, 1.37),
-        ("cube (2 triangles per face)", shapes::cube(), awkward(Vec3::new(1.832, 2.1447, 0.8441), off), off, 0.8),
+        (
+            "icosphere",
+            shapes::icosphere(4),
+            awkward(Vec3::splat(1.37), off),
+            off,
+            1.37,
+        ),
+        (
+            "cube (2 triangles per face)",
+            shapes::cube(),
+            awkward(Vec3::new(1.832, 2.1447, 0.8441), off),
+            off,
+            0.8,
+        ),
         // The centroid of the cone (height 1, radius 1) is at y = 1/4.
-        ("cone of thin fans", cone(if b.full { 20000 } else { 2000 }), awkward(Vec3::new(0.9173, 1.3, 0.9173), off), off, 0.5),
+        (
+            "cone of thin fans",
+            cone(if b.full { 20000 } else { 2000 }),
+            awkward(Vec3::new(0.9173, 1.3, 0.9173), off),
+            off,
+            0.5,
+        ),
     ];
     for (name, mesh, m, _, size) in meshes {
         let tris = place(&mesh, m);
@@ -162,7 +203,12 @@ pub fn watertight(b: &Budget) -> Vec<Row> {
         let g = geometry_of(&tris, &[], Some(SplitMethod::SahBinned));
         let (n, misses) = closed_mesh_misses(&g, &tris, centre, size, b.rays, 7);
         let case = format!("watertight {name}");
-        rows.push(Row::at_most(&case, format!("rays through edges/vertices missing (of {n})"), misses as f64, 0.0));
+        rows.push(Row::at_most(
+            &case,
+            format!("rays through edges/vertices missing (of {n})"),
+            misses as f64,
+            0.0,
+        ));
     }
     rows
 }
@@ -195,7 +241,10 @@ pub fn axis_grazing(b: &Budget) -> Vec<Row> {
     let mut tris = Vec::new();
     // A floor of 32x32 cells at y = 0 (8 units wide) and a staircase of boxes whose faces
     // share planes, so many BVH boxes are flat or touch the rays' planes exactly.
-    tris.extend(place(&shapes::plane(32), Affine3A::from_scale(Vec3::new(8.0, 1.0, 8.0))));
+    tris.extend(place(
+        &shapes::plane(32),
+        Affine3A::from_scale(Vec3::new(8.0, 1.0, 8.0)),
+    ));
     for i in 0..6 {
         let fi = i as f32;
         let m = Affine3A::from_scale_rotation_translation(
@@ -205,10 +254,23 @@ pub fn axis_grazing(b: &Budget) -> Vec<Row> {
         );
         tris.extend(place(&shapes::cube(), m));
     }
-    tris.extend(place(&shapes::icosphere(2), Affine3A::from_scale_rotation_translation(Vec3::splat(0.6), Quat::IDENTITY, Vec3::new(2.0, 0.6, -1.0))));
+    tris.extend(place(
+        &shapes::icosphere(2),
+        Affine3A::from_scale_rotation_translation(
+            Vec3::splat(0.6),
+            Quat::IDENTITY,
+            Vec3::new(2.0, 0.6, -1.0),
+        ),
+    ));
     let spheres = [
-        Sphere { center: Vec3::new(-2.0, 0.5, -1.5), radius: 0.5 },
-        Sphere { center: Vec3::new(0.0, 1.5, -2.0), radius: 0.25 },
+        Sphere {
+            center: Vec3::new(-2.0, 0.5, -1.5),
+            radius: 0.5,
+        },
+        Sphere {
+            center: Vec3::new(0.0, 1.5, -2.0),
+            radius: 0.25,
+        },
     ];
     let planes: Vec<f32> = tris.iter().flatten().flat_map(|p| p.to_array()).collect();
     let mut rng = Lcg(99);
@@ -250,7 +312,10 @@ pub fn axis_grazing(b: &Budget) -> Vec<Row> {
         let o = target - 4.0 * horizontal + Vec3::new(0.0, h, 0.0);
         grazing.push(Ray::new(o, target - o));
     }
-    for (split, name) in [(SplitMethod::SahBinned, "sah"), (SplitMethod::Median, "median")] {
+    for (split, name) in [
+        (SplitMethod::SahBinned, "sah"),
+        (SplitMethod::Median, "median"),
+    ] {
         let bvh = geometry_of(&tris, &spheres, Some(split));
         let brute = geometry_of(&tris, &spheres, None);
         for (kind, rays) in [
@@ -261,15 +326,36 @@ pub fn axis_grazing(b: &Budget) -> Vec<Row> {
         ] {
             let (differ, nonfinite) = compare(&bvh, &brute, rays);
             let case = format!("axis/grazing {name}");
-            rows.push(Row::at_most(&case, format!("{kind}: BVH and brute force disagree (hit/miss, or t beyond 4 ulp) (of {})", rays.len()), differ as f64, 0.0));
-            rows.push(Row::at_most(&case, format!("{kind}: non-finite hits"), nonfinite as f64, 0.0));
+            rows.push(Row::at_most(
+                &case,
+                format!(
+                    "{kind}: BVH and brute force disagree (hit/miss, or t beyond 4 ulp) (of {})",
+                    rays.len()
+                ),
+                differ as f64,
+                0.0,
+            ));
+            rows.push(Row::at_most(
+                &case,
+                format!("{kind}: non-finite hits"),
+                nonfinite as f64,
+                0.0,
+            ));
         }
         // Every grazing ray reaches the floor (or something above it) before t = 1.
         let missed = grazing
             .par_iter()
-            .filter(|r| !bvh.intersect(r, f32::INFINITY, &mut ()).is_some_and(|h| h.t <= 1.0 + 1e-5))
+            .filter(|r| {
+                !bvh.intersect(r, f32::INFINITY, &mut ())
+                    .is_some_and(|h| h.t <= 1.0 + 1e-5)
+            })
             .count();
-        rows.push(Row::at_most(format!("axis/grazing {name}"), "grazing rays missing the floor", missed as f64, 0.0));
+        rows.push(Row::at_most(
+            format!("axis/grazing {name}"),
+            "grazing rays missing the floor",
+            missed as f64,
+            0.0,
+        ));
     }
     rows
 }
@@ -293,13 +379,33 @@ pub fn degenerate(b: &Budget) -> Vec<Row> {
         tris.push(format!("({}, {}, {})", base, base + 1, base + 2));
     };
     // Zero-area: collinear, duplicate vertex, all three equal; on and off the axes.
-    add([Vec3::new(-1.0, 0.5, 0.0), Vec3::new(0.0, 0.5, 0.0), Vec3::new(1.0, 0.5, 0.0)]);
-    add([Vec3::new(0.1, 0.2, 0.3), Vec3::new(0.2, 0.4, 0.6), Vec3::new(0.4, 0.8, 1.2)]);
-    add([Vec3::new(0.3, 0.3, 0.0), Vec3::new(0.3, 0.3, 0.0), Vec3::new(-0.7, 0.9, 0.1)]);
+    add([
+        Vec3::new(-1.0, 0.5, 0.0),
+        Vec3::new(0.0, 0.5, 0.0),
+        Vec3::new(1.0, 0.5, 0.0),
+    ]);
+    add([
+        Vec3::new(0.1, 0.2, 0.3),
+        Vec3::new(0.2, 0.4, 0.6),
+        Vec3::new(0.4, 0.8, 1.2),
+    ]);
+    add([
+        Vec3::new(0.3, 0.3, 0.0),
+        Vec3::new(0.3, 0.3, 0.0),
+        Vec3::new(-0.7, 0.9, 0.1),
+    ]);
     add([Vec3::splat(0.25); 3]);
     // Needles: long and 1e-7 .. 1e-30 wide.
-    add([Vec3::new(-1.0, -0.5, 0.0), Vec3::new(1.0, -0.5, 0.0), Vec3::new(0.0, -0.5 + 1e-7, 0.0)]);
-    add([Vec3::new(-1.0, -0.3, 0.2), Vec3::new(1.0, -0.3, 0.2), Vec3::new(0.3, -0.3, 0.2 + 1e-30)]);
+    add([
+        Vec3::new(-1.0, -0.5, 0.0),
+        Vec3::new(1.0, -0.5, 0.0),
+        Vec3::new(0.0, -0.5 + 1e-7, 0.0),
+    ]);
+    add([
+        Vec3::new(-1.0, -0.3, 0.2),
+        Vec3::new(1.0, -0.3, 0.2),
+        Vec3::new(0.3, -0.3, 0.2 + 1e-30),
+    ]);
     let inline = format!(
         "Inline(vertices: [{}], triangles: [{}])",
         verts.join(", "),
@@ -328,15 +434,26 @@ pub fn degenerate(b: &Budget) -> Vec<Row> {
         Ok(r) => r,
         Err(e) => return vec![Row::error(case, e)],
     };
-    rows.push(Row::exactly(case, "load warnings (zero-length normal re-derived)", renderer.warnings().len() as f64, 1.0));
+    rows.push(Row::exactly(
+        case,
+        "load warnings (zero-length normal re-derived)",
+        renderer.warnings().len() as f64,
+        1.0,
+    ));
     let rendered = match render(renderer) {
         Ok(r) => r,
         Err(e) => return vec![Row::error(case, e)],
     };
-    rows.push(Row::at_most(case, "non-finite pixels and samples", rendered.nonfinite(), 0.0));
+    rows.push(Row::at_most(
+        case,
+        "non-finite pixels and samples",
+        rendered.nonfinite(),
+        0.0,
+    ));
 
     // Trace straight at the degenerate triangles: the loaded, world-space geometry.
-    let mut renderer = Renderer::from_scene(&parse_scene(&text, path).expect("parsed above"), path).expect("loaded above");
+    let mut renderer = Renderer::from_scene(&parse_scene(&text, path).expect("parsed above"), path)
+        .expect("loaded above");
     if let Err(e) = renderer.prepare() {
         return vec![Row::error(case, e)];
     }
@@ -361,15 +478,39 @@ pub fn degenerate(b: &Budget) -> Vec<Row> {
         .map(|(_, r)| match g.intersect(r, f32::INFINITY, &mut ()) {
             Some(h) => {
                 let s = surface_at(g, r, &h, true);
-                let bad = !(h.t.is_finite() && h.bary.is_finite() && s.p.is_finite() && s.n.is_finite() && s.ng.is_finite() && s.uv.is_finite() && s.p_error.is_finite());
+                let bad = !(h.t.is_finite()
+                    && h.bary.is_finite()
+                    && s.p.is_finite()
+                    && s.n.is_finite()
+                    && s.ng.is_finite()
+                    && s.uv.is_finite()
+                    && s.p_error.is_finite());
                 (degenerate[h.prim as usize] as usize, bad as usize)
             }
             None => (0, 0),
         })
         .reduce(|| (0, 0), |x, y| (x.0 + y.0, x.1 + y.1));
     let n_degenerate = degenerate.iter().filter(|&&d| d).count();
-    rows.push(Row::exactly(case, "zero-area triangles in the loaded scene", n_degenerate as f64, 8.0));
-    rows.push(Row::at_most(case, format!("hits reported on zero-area triangles (of {} rays)", rays.len()), hits_on_degenerate as f64, 0.0));
-    rows.push(Row::at_most(case, "hits with a non-finite point, normal or uv", nonfinite as f64, 0.0));
+    rows.push(Row::exactly(
+        case,
+        "zero-area triangles in the loaded scene",
+        n_degenerate as f64,
+        8.0,
+    ));
+    rows.push(Row::at_most(
+        case,
+        format!(
+            "hits reported on zero-area triangles (of {} rays)",
+            rays.len()
+        ),
+        hits_on_degenerate as f64,
+        0.0,
+    ));
+    rows.push(Row::at_most(
+        case,
+        "hits with a non-finite point, normal or uv",
+        nonfinite as f64,
+        0.0,
+    ));
     rows
 }

@@ -43,7 +43,12 @@ pub struct Row {
 
 impl Row {
     /// A row that passes when `value <= bound`.
-    pub fn at_most(case: impl Into<String>, measure: impl Into<String>, value: f64, bound: f64) -> Row {
+    pub fn at_most(
+        case: impl Into<String>,
+        measure: impl Into<String>,
+        value: f64,
+        bound: f64,
+    ) -> Row {
         Row {
             case: case.into(),
             measure: measure.into(),
@@ -54,7 +59,12 @@ impl Row {
     }
 
     /// A row that passes when `value == expected` (a count that must match exactly).
-    pub fn exactly(case: impl Into<String>, measure: impl Into<String>, value: f64, expected: f64) -> Row {
+    pub fn exactly(
+        case: impl Into<String>,
+        measure: impl Into<String>,
+        value: f64,
+        expected: f64,
+    ) -> Row {
         Row {
             case: case.into(),
             measure: format!("{} (= bound)", measure.into()),
@@ -212,7 +222,8 @@ fn fmt_value(v: f64) -> String {
 
 /// The rows as a markdown table.
 pub fn table(rows: &[Row]) -> String {
-    let mut s = String::from("| case | measure | value | bound | result |\n|---|---|---:|---:|---|\n");
+    let mut s =
+        String::from("| case | measure | value | bound | result |\n|---|---|---:|---:|---|\n");
     for r in rows {
         let _ = writeln!(
             s,
@@ -248,7 +259,11 @@ pub fn csv(rows: &[Row]) -> String {
 /// The `glint stress` command: runs the cases whose name contains `only` (all when
 /// `None`), prints the table, writes `csv_path`; returns whether every row passed.
 pub fn run(quick: bool, csv_path: Option<&Path>, only: Option<&str>) -> Result<bool> {
-    let budget = if quick { Budget::quick() } else { Budget::full() };
+    let budget = if quick {
+        Budget::quick()
+    } else {
+        Budget::full()
+    };
     let selected: Vec<Case> = cases()
         .into_iter()
         .filter(|c| only.is_none_or(|o| c.name.contains(o)))
@@ -303,8 +318,8 @@ pub struct Rendered {
 impl Rendered {
     /// Pixels with a NaN or infinite component, plus samples the film dropped as non-finite.
     pub fn nonfinite(&self) -> f64 {
-        (self.image.iter().filter(|p| !p.is_finite()).count() as u64
-            + self.stats.nonfinite_samples) as f64
+        (self.image.iter().filter(|p| !p.is_finite()).count() as u64 + self.stats.nonfinite_samples)
+            as f64
     }
 
     /// Largest per-component absolute difference to `other` (infinite if sizes differ).
@@ -338,7 +353,10 @@ impl Rendered {
         self.image
             .iter()
             .map(|p| (*p - expected).abs().max_element() as f64)
-            .fold(0.0, |a: f64, b| if b.is_nan() { f64::INFINITY } else { a.max(b) })
+            .fold(
+                0.0,
+                |a: f64, b| if b.is_nan() { f64::INFINITY } else { a.max(b) },
+            )
     }
 }
 

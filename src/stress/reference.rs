@@ -5,7 +5,8 @@
 //! It knows rectangles, spheres and axis-aligned boxes, traces one ray through each
 //! pixel centre in f64, and decides lit / shadowed / miss. Near a boundary (silhouette,
 //! shadow edge, terminator, contact) the f32 render may legitimately decide either way,
-//! so each pixel is also decided for rays perturbed by `margin` (world units) and by a
+//! so each pixel is also decided for rays perturbed by `margin` (world units), with the
+//! shadow ray lifted off the surface by `margin`, and by a
 //! fiftieth of a pixel; a pixel whose decisions disagree is `Unknown` and not counted.
 
 use glam::{DVec3, Vec3};
@@ -172,13 +173,14 @@ impl RefScene {
             .any(|(i, prim)| i != own && hit_prim(prim, p, l, 1e-12).is_some_and(|(t, _)| t < 1.0))
     }
 
-    /// The decision for one ray.
-    fn decide(&self, o: DVec3, d: DVec3) -> Expect {
+    /// The decision for one ray, the shadow ray starting `lift` off the surface (as the
+    /// tracer's offset origins do).
+    fn decide(&self, o: DVec3, d: DVec3, lift: f64) -> Expect {
         match self.closest(o, d) {
             None => Expect::Miss,
             Some((t, i, n)) => {
                 let n = if n.dot(d) > 0.0 { -n } else { n };
-                if self.sees_light(o + t * d, n, i) {
+                if self.sees_light(o + t * d + lift * n, n, i) {
                     Expect::Lit
                 } else {
                     Expect::Dark
@@ -192,22 +194,35 @@ impl RefScene {
         let m = self.margin;
         let centre = self.decide_pixel(camera, x as f64 + 0.5, y as f64 + 0.5, DVec3::ZERO);
         let pixel = 0.02;
-        let jitters = [
-            (pixel, 0.0),
-            (-pixel, 0.0),
-            (0.0, pixel),
-            (0.0, -pixel),
-        ];
+        let jitters = [(pixel, 0.0), (-pixel, 0.0), (0.0, pixel), (0.0, -pixel)];
         for (dx, dy) in jitters {
-            let e = self.decide_pixel(camera, x as f64 + 0.5 + dx, y as f64 + 0.5 + dy, DVec3::ZERO);
+            let e = self.decide_pixel(
+                camera,
+                x as f64 + 0.5 + dx,
+                y as f64 + 0.5 + dy,
+                DVec3::ZERO,
+            );
             if e != centre {
                 return Expect::Unknown;
             }
         }
-        for delta in [DVec3::X, DVec3::NEG_X, DVec3::Y, DVec3::NEG_Y, DVec3::Z, DVec3::NEG_Z] {
-            let e = self.decide_pixel(camera, x as f64 + 0.5, y as f64 + 0.5, delta * m);
-            if e != centre {
-                return Expect::Unknown;
+        // Shifted eyes move the hit along the surface, lifts move the shadow origin off it
+        // (lifted origins can enter a nearby object at one height and not another).
+        let (o, d) = camera_ray_f64(camera, x as f64 + 0.5, y as f64 + 0.5);
+        let shifts = [
+            DVec3::ZERO,
+            DVec3::X,
+            DVec3::NEG_X,
+            DVec3::Y,
+            DVec3::NEG_Y,
+            DVec3::Z,
+            DVec3::NEG_Z,
+        ];
+        for shift in shifts {
+            for lift in [0.0, 0.125, 0.25, 0.5, 0.75, 1.0] {
+                if self.decide(o + shift * m, d, lift * m) != centre {
+                    return Expect::Unknown;
+                }
             }
         }
         centre
@@ -216,7 +231,7 @@ impl RefScene {
     fn decide_pixel(&self, camera: &Camera, x: f64, y: f64, delta: DVec3) -> Expect {
         let (o, d) = camera_ray_f64(camera, x, y);
         // Also move the eye, so silhouettes are fuzzy by the margin too.
-        self.decide(o + delta, d)
+        self.decide(o + delta, d, 0.0)
     }
 
     /// Counts acne (should be lit, rendered dark), leaks (should be dark, rendered lit),
@@ -232,13 +247,13 @@ impl RefScene {
                     Expect::Unknown => c.unknown += 1,
                     Expect::Lit => {
                         c.lit += 1;
-                        if !(v > half) {
+                        if v.is_nan() || v <= half {
                             c.acne += 1;
                         }
                     }
                     Expect::Dark => {
                         c.dark += 1;
-                        if !(v < half) {
+                        if v.is_nan() || v >= half {
                             c.leaks += 1;
                         }
                     }
