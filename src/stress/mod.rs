@@ -91,7 +91,7 @@ impl Row {
 pub struct Budget {
     /// Image width of rendered cases (height is 3/4 of it).
     pub width: u32,
-    /// Rays per mesh in the watertightness and traversal cases.
+    /// Rays per mesh in the watertightness case (a tenth per kind in the traversal case).
     pub rays: usize,
     /// Use the largest sample counts (shadow_samples 4096 on a full image).
     pub full: bool,
@@ -102,7 +102,7 @@ impl Budget {
     pub fn quick() -> Budget {
         Budget {
             width: 48,
-            rays: 40_000,
+            rays: 60_000,
             full: false,
         }
     }
@@ -111,7 +111,7 @@ impl Budget {
     pub fn full() -> Budget {
         Budget {
             width: 160,
-            rays: 2_000_000,
+            rays: 1_000_000,
             full: true,
         }
     }
