@@ -333,7 +333,7 @@ pub fn axis_grazing(b: &Budget) -> Vec<Row> {
             rows.push(Row::at_most(
                 &case,
                 format!(
-                    "{kind}: BVH and brute force disagree (hit/miss, or t beyond 4 ulp) (of {})",
+                    "{kind}: BVH and brute force disagree (hit/miss, or t beyond rounding) (of {})",
                     rays.len()
                 ),
                 differ as f64,
