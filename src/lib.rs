@@ -18,6 +18,7 @@ pub mod sampling;
 pub mod scene;
 pub mod schedule;
 pub mod shade;
+pub mod stress;
 pub mod trace;
 
 pub use error::{GlintError, Result};

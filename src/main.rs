@@ -30,6 +30,9 @@ enum Command {
     Converge(ConvergeArgs),
     /// Explain one pixel: a debug image of its rays, BVH, lights, texture and samples.
     Debug(DebugCmd),
+    /// Run the numerical stress suite (extreme scales, edges, grazing rays, degenerate
+    /// input...) and print a table of measurements; fails if any case fails.
+    Stress(StressArgs),
 }
 
 #[derive(Args, Debug)]
@@ -38,6 +41,22 @@ struct DebugCmd {
     scene: SceneArgs,
     #[command(flatten)]
     debug: glint::debug::DebugArgs,
+}
+
+#[derive(Args, Debug)]
+struct StressArgs {
+    /// Small images and ray counts (what the test suite runs).
+    #[arg(long)]
+    quick: bool,
+    /// Also write the measurements as CSV to this file.
+    #[arg(long, value_name = "FILE")]
+    csv: Option<PathBuf>,
+    /// Run only the cases whose name contains this text.
+    #[arg(long = "case", value_name = "NAME")]
+    case: Option<String>,
+    /// Worker threads (default: all cores).
+    #[arg(long)]
+    threads: Option<usize>,
 }
 
 #[derive(Args, Debug)]
@@ -300,6 +319,22 @@ fn info(args: &SceneArgs) -> Result<()> {
     Ok(())
 }
 
+fn stress(args: &StressArgs) -> Result<()> {
+    if let Some(n) = args.threads {
+        rayon::ThreadPoolBuilder::new()
+            .num_threads(n.max(1))
+            .build_global()
+            .map_err(|e| GlintError::Usage(format!("--threads: {e}")))?;
+    }
+    if glint::stress::run(args.quick, args.csv.as_deref(), args.case.as_deref())? {
+        Ok(())
+    } else {
+        Err(GlintError::Usage(
+            "some stress cases failed (see the table)".into(),
+        ))
+    }
+}
+
 fn main() -> ExitCode {
     let cli = Cli::parse();
     let result = match &cli.command {
@@ -309,6 +344,7 @@ fn main() -> ExitCode {
         Command::Debug(a) => {
             glint::debug::run(&a.scene.scene, &overrides(&a.scene), &a.debug).map(|()| None)
         }
+        Command::Stress(a) => stress(a).map(|()| None),
     };
     match result {
         Ok(None) => ExitCode::SUCCESS,

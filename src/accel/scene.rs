@@ -6,6 +6,7 @@ use glam::{Vec2, Vec3};
 
 use super::{
     Aabb, Bvh, Ray, SplitMethod, TraversalVisitor, intersect_sphere, intersect_triangle,
+    sphere::sphere_roots,
     triangle::{RayShear, intersect_triangle_sheared},
 };
 use crate::scene::{Acceleration, BvhSplit, Mesh, Settings, Sphere, Transform};
@@ -234,15 +235,21 @@ impl SceneGeometry {
         if !self.sphere_bvh.nodes.is_empty() {
             let blocked = self.sphere_bvh.any_hit(ray, t_max, visitor, |p| {
                 let s = &self.spheres[p as usize];
-                let Some(t) = intersect_sphere(ray, s.center, s.radius, t_max) else {
+                let Some((t0, t1)) = sphere_roots(ray, s.center, s.radius) else {
                     return false;
                 };
                 let material = self.sphere_material[p as usize];
-                if opaque(material) {
-                    return true;
+                // A sphere is two surfaces: a ray through it crosses both roots.
+                for t in [t0, t1] {
+                    if !(t > 0.0 && t < t_max) {
+                        continue;
+                    }
+                    if opaque(material) {
+                        return true;
+                    }
+                    let n = (ray.origin + t * ray.dir - s.center) / s.radius;
+                    crossings.push((t, material, sphere_uv(n)));
                 }
-                let n = (ray.origin + t * ray.dir - s.center) / s.radius;
-                crossings.push((t, material, sphere_uv(n)));
                 false
             });
             if blocked {

@@ -13,6 +13,18 @@ use super::Ray;
 
 /// Nearest t in (0, t_max) where the ray meets the sphere (the far root when the origin is inside).
 pub fn intersect_sphere(ray: &Ray, center: glam::Vec3, radius: f32, t_max: f32) -> Option<f32> {
+    let (t0, t1) = sphere_roots(ray, center, radius)?;
+    if t0 > 0.0 && t0 < t_max {
+        Some(t0)
+    } else if t1 > 0.0 && t1 < t_max {
+        Some(t1)
+    } else {
+        None
+    }
+}
+
+/// Both roots `t0 <= t1` of the ray's line with the sphere, or None when it misses.
+pub fn sphere_roots(ray: &Ray, center: glam::Vec3, radius: f32) -> Option<(f32, f32)> {
     let f = ray.origin - center;
     let d = ray.dir;
     let a = d.dot(d);
@@ -32,18 +44,9 @@ pub fn intersect_sphere(ray: &Ray, center: glam::Vec3, radius: f32, t_max: f32) 
         // Only when b = 0 and disc = 0: the origin is the tangent point, t = 0.
         return None;
     }
-    let (t0, t1) = {
-        let r0 = c / q;
-        let r1 = q / a;
-        if r0 <= r1 { (r0, r1) } else { (r1, r0) }
-    };
-    if t0 > 0.0 && t0 < t_max {
-        Some(t0)
-    } else if t1 > 0.0 && t1 < t_max {
-        Some(t1)
-    } else {
-        None
-    }
+    let r0 = c / q;
+    let r1 = q / a;
+    Some(if r0 <= r1 { (r0, r1) } else { (r1, r0) })
 }
 
 #[cfg(test)]

@@ -10,7 +10,7 @@
 
 use glam::Vec3;
 
-use super::Ray;
+use super::{Ray, gamma};
 
 /// A ray/triangle hit: parameter `t` and the barycentric weights of v0, v1, v2.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -161,12 +161,61 @@ pub fn intersect_triangle_sheared(
     if !(t > 0.0 && t < t_max) {
         return None;
     }
+    // A t within its own rounding error of 0 may be the surface the ray starts on: when
+    // the spawn point is exact along the normal (a plane at z = 0) its offset is zero, and
+    // a grazing ray from it would otherwise re-hit its own triangle. The bound follows
+    // pbrt (3rd ed., 3.9.6) but carries each vertex's own magnitudes through the shear
+    // (pbrt's bounds every sheared y by the largest z), so that a ray grazing a surface
+    // from even a few ulps away still hits it.
+    if t <= 3.0
+        * t_error(
+            s,
+            [a, b, c],
+            [ax, ay, bx, by, cx, cy],
+            [u, v, w],
+            [az, bz, cz],
+            t,
+            inv_det,
+        )
+    {
+        return None;
+    }
     Some(TriangleHit {
         t,
         b0: u * inv_det,
         b1: v * inv_det,
         b2: w * inv_det,
     })
+}
+
+/// First-order bound on the rounding error of the computed `t`.
+///
+/// `rel` are the vertices relative to the ray origin, `sheared` their sheared x and y,
+/// `e` the edge functions, `z` the scaled z coordinates.
+#[inline(always)]
+fn t_error(
+    s: &RayShear,
+    rel: [[f32; 3]; 3],
+    sheared: [f32; 6],
+    e: [f32; 3],
+    z: [f32; 3],
+    t: f32,
+    inv_det: f32,
+) -> f32 {
+    let [ax, ay, bx, by, cx, cy] = sheared.map(f32::abs);
+    // Errors of the sheared coordinates: the subtraction from the origin, the shear product, the difference.
+    let ex = rel.map(|p| gamma(5) * (p[s.kx].abs() + (s.sx * p[s.kz]).abs()));
+    let ey = rel.map(|p| gamma(5) * (p[s.ky].abs() + (s.sy * p[s.kz]).abs()));
+    let g2 = gamma(2);
+    // Errors of the edge functions u = cx by - cy bx, v = ax cy - ay cx, w = bx ay - by ax.
+    let eu = cx * ey[1] + by * ex[2] + cy * ex[1] + bx * ey[2] + g2 * (cx * by + cy * bx);
+    let ev = ax * ey[2] + cy * ex[0] + ay * ex[2] + cx * ey[0] + g2 * (ax * cy + ay * cx);
+    let ew = bx * ey[0] + ay * ex[1] + by * ex[0] + ax * ey[1] + g2 * (bx * ay + by * ax);
+    let [u, v, w] = e.map(f32::abs);
+    let [az, bz, cz] = z.map(f32::abs);
+    let e_det = eu + ev + ew + g2 * (u + v + w);
+    let e_scaled = eu * az + ev * bz + ew * cz + gamma(6) * (u * az + v * bz + w * cz);
+    (e_scaled + t.abs() * e_det) * inv_det.abs() * (1.0 + gamma(2))
 }
 
 /// True when the three vertices are exactly collinear (or coincide).

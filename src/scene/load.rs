@@ -332,6 +332,26 @@ fn shape_mesh(c: &Check, g: &GeometryDesc, warnings: &mut Vec<String>) -> Result
     })
 }
 
+/// Rejects a mesh whose vertices overflow f32 once placed in the world (finite in the
+/// file, infinite after the transform).
+fn check_world_positions(c: &Check, data: &MeshData, transform: &Transform) -> Result<()> {
+    let m = transform.world_from_object;
+    match data
+        .vertices
+        .iter()
+        .position(|v| !m.transform_point3(v.position).is_finite())
+    {
+        Some(i) => Err(c.err(
+            &format!("vertices[{i}].position"),
+            format!(
+                "{} overflows f32 after the transform",
+                data.vertices[i].position
+            ),
+        )),
+        None => Ok(()),
+    }
+}
+
 fn entity_label(kind: &str, index: usize, name: &Option<String>) -> String {
     match name {
         Some(n) => format!("entities[{index}] ({kind} \"{n}\")"),
@@ -406,6 +426,7 @@ pub fn spawn_scene(world: &mut World, file: &SceneFile, path: &Path) -> Result<(
                     }
                     g => {
                         let data = shape_mesh(&c, g, &mut warnings)?;
+                        check_world_positions(&c, &data, &transform)?;
                         let material = material_ref(&c, &d.material)?;
                         world.spawn((
                             name,
@@ -428,6 +449,16 @@ pub fn spawn_scene(world: &mut World, file: &SceneFile, path: &Path) -> Result<(
                     return Err(c.err(
                         "radius",
                         format!("must be positive and finite, got {}", d.radius),
+                    ));
+                }
+                // The intersection test squares the radius: it must stay a normal f32.
+                if !(d.radius * d.radius).is_normal() {
+                    return Err(c.err(
+                        "radius",
+                        format!(
+                            "{} is out of range: its square over- or underflows f32 (use 1e-18 .. 1e18)",
+                            d.radius
+                        ),
                     ));
                 }
                 let material = material_ref(&c, &Some(d.material.clone()))?;
