@@ -1,9 +1,13 @@
 //! BVH benchmarks: glint's binned-SAH BVH next to `obvhs` (PLOC + CWBVH8) on
-//! the same procedural triangles and the same rays, in the same criterion
-//! groups. Build figures are Mtris/s, traversal figures Mrays/s (criterion
-//! "elements" are triangles resp. rays). Traversal runs on one thread.
+//! the same triangles and the same rays, in the same criterion groups: two
+//! procedural meshes (100k and 1M triangles) and, when `../shared/assets` is
+//! present, real models loaded through glint's own importers (the Stanford
+//! bunny, the Dabrovic Sponza, MetalRoughSpheresNoTextures). Build figures are
+//! Mtris/s, traversal figures Mrays/s (criterion "elements" are triangles
+//! resp. rays). Traversal runs on one thread.
 
 use std::hint::black_box;
+use std::path::{Path, PathBuf};
 use std::time::Duration;
 
 use criterion::{
@@ -78,13 +82,64 @@ fn displaced_sphere(n: usize) -> Vec<[Vec3; 3]> {
     tris
 }
 
-/// Pinhole camera grid looking at the mesh from +z.
-fn primary_rays(w: usize, h: usize) -> Vec<Ray> {
-    let eye = vec3(0.3, 0.4, 3.0);
-    let fwd = (Vec3::ZERO - eye).normalize();
+/// Where the rays come from: a camera, a point light, and how far ray origins
+/// leave the surface.
+struct View {
+    eye: Vec3,
+    target: Vec3,
+    fov_y_degrees: f32,
+    light: Vec3,
+    offset: f32,
+    /// Orient normals away from this point (the mesh is star-shaped about it);
+    /// `None` keeps the winding's normal (incoherent rays pick a side anyway)
+    /// and offsets shadow-ray origins towards the light.
+    star_centre: Option<Vec3>,
+}
+
+impl View {
+    /// The procedural sphere: seen from +z, lit from above right.
+    fn sphere() -> Self {
+        Self {
+            eye: vec3(0.3, 0.4, 3.0),
+            target: Vec3::ZERO,
+            fov_y_degrees: 40.0,
+            light: vec3(2.0, 3.0, 2.5),
+            offset: 1e-3,
+            star_centre: Some(Vec3::ZERO),
+        }
+    }
+
+    /// A model: glint's automatic camera framing the bounds, and glint's
+    /// default point light (above and to the left of the eye).
+    fn framing(tris: &[[Vec3; 3]]) -> Self {
+        let (lo, hi) = tris
+            .iter()
+            .flatten()
+            .fold((Vec3::INFINITY, Vec3::NEG_INFINITY), |(lo, hi), &p| {
+                (lo.min(p), hi.max(p))
+            });
+        let (centre, radius) = (0.5 * (lo + hi), 0.5 * (hi - lo).length());
+        let cam = glint::scene::model::framing_camera(centre, radius, 256, 256);
+        let eye = cam.position - centre;
+        let up_left = vec3(-0.5, 1.0, 0.0) * eye.length();
+        Self {
+            eye: cam.position,
+            target: cam.look_at,
+            fov_y_degrees: cam.fov_y_degrees,
+            light: centre + (eye + up_left) * 1.2,
+            offset: 1e-4 * radius,
+            star_centre: None,
+        }
+    }
+}
+
+/// Pinhole camera grid looking from `view.eye` at `view.target`.
+fn primary_rays(view: &View, w: usize, h: usize) -> Vec<Ray> {
+    let eye = view.eye;
+    let fwd = (view.target - eye).normalize();
     let right = fwd.cross(Vec3::Y).normalize();
     let up = right.cross(fwd);
-    let tan = (40f32.to_radians() * 0.5).tan();
+    let tan = (view.fov_y_degrees.to_radians() * 0.5).tan();
     let mut rays = Vec::with_capacity(w * h);
     for y in 0..h {
         for x in 0..w {
@@ -97,7 +152,12 @@ fn primary_rays(w: usize, h: usize) -> Vec<Ray> {
 }
 
 /// Random surface points (with their geometric normals).
-fn surface_points(tris: &[[Vec3; 3]], n: usize, rng: &mut Lcg) -> Vec<(Vec3, Vec3)> {
+fn surface_points(
+    tris: &[[Vec3; 3]],
+    n: usize,
+    star_centre: Option<Vec3>,
+    rng: &mut Lcg,
+) -> Vec<(Vec3, Vec3)> {
     (0..n)
         .map(|_| {
             let [a, b, c] = tris[((rng.f() * tris.len() as f32) as usize).min(tris.len() - 1)];
@@ -107,33 +167,39 @@ fn surface_points(tris: &[[Vec3; 3]], n: usize, rng: &mut Lcg) -> Vec<(Vec3, Vec
             }
             let p = a + u * (b - a) + v * (c - a);
             let nrm = (b - a).cross(c - a).normalize_or_zero();
-            // Orient outwards (the mesh is star-shaped about the origin).
-            let nrm = if nrm.dot(p) < 0.0 { -nrm } else { nrm };
-            (p, nrm)
+            match star_centre {
+                Some(c) if nrm.dot(p - c) < 0.0 => (p, -nrm),
+                _ => (p, nrm),
+            }
         })
         .collect()
 }
 
 /// Random origins just off the surface (either side), random directions.
-fn incoherent_rays(tris: &[[Vec3; 3]], n: usize) -> Vec<Ray> {
+fn incoherent_rays(tris: &[[Vec3; 3]], view: &View, n: usize) -> Vec<Ray> {
     let mut rng = Lcg(777);
-    surface_points(tris, n, &mut rng)
+    surface_points(tris, n, view.star_centre, &mut rng)
         .into_iter()
         .map(|(p, nrm)| {
             let side = if rng.f() < 0.5 { 1.0 } else { -1.0 };
-            Ray::new(p + side * 1e-3 * nrm, rng.dir())
+            Ray::new(p + side * view.offset * nrm, rng.dir())
         })
         .collect()
 }
 
-/// Shadow rays from points just outside the surface to a point light; t in (0, 1).
-fn shadow_rays(tris: &[[Vec3; 3]], n: usize) -> Vec<Ray> {
-    let light = vec3(2.0, 3.0, 2.5);
+/// Shadow rays from points just off the surface (outside a star-shaped mesh,
+/// else on the light's side) to the point light; t in (0, 1).
+fn shadow_rays(tris: &[[Vec3; 3]], view: &View, n: usize) -> Vec<Ray> {
+    let light = view.light;
     let mut rng = Lcg(999);
-    surface_points(tris, n, &mut rng)
+    surface_points(tris, n, view.star_centre, &mut rng)
         .into_iter()
         .map(|(p, nrm)| {
-            let o = p + 1e-3 * nrm;
+            let nrm = match view.star_centre {
+                None if nrm.dot(light - p) < 0.0 => -nrm,
+                _ => nrm,
+            };
+            let o = p + view.offset * nrm;
             Ray::new(o, light - o)
         })
         .collect()
@@ -173,8 +239,15 @@ fn obvhs_occluded(bvh: &CwBvh, tris: &[Triangle], ray: &ORay) -> bool {
     })
 }
 
-fn bench_size(c: &mut Criterion, label: &str, n: usize, samples: usize) {
-    let tris = displaced_sphere(n);
+/// Criterion settings of one mesh's groups.
+struct Budget {
+    samples: usize,
+    build_time: Duration,
+    trace_time: Duration,
+}
+
+fn bench_mesh(c: &mut Criterion, label: &str, tris: &[[Vec3; 3]], view: &View, budget: &Budget) {
+    let samples = budget.samples;
     let bounds: Vec<Aabb> = tris.iter().map(|t| Aabb::from_points(t)).collect();
     let otris: Vec<Triangle> = tris
         .iter()
@@ -196,6 +269,7 @@ fn bench_size(c: &mut Criterion, label: &str, n: usize, samples: usize) {
         g.sample_size(samples)
             .sampling_mode(SamplingMode::Flat)
             .warm_up_time(Duration::from_millis(500))
+            .measurement_time(budget.build_time)
             .throughput(Throughput::Elements(tris.len() as u64));
         g.bench_function("glint_sah_rayon", |b| {
             b.iter(|| Bvh::build(black_box(&bounds), SplitMethod::SahBinned))
@@ -243,9 +317,9 @@ fn bench_size(c: &mut Criterion, label: &str, n: usize, samples: usize) {
     );
 
     let ray_sets: [(&str, Vec<Ray>); 3] = [
-        ("primary", primary_rays(256, 256)),
-        ("incoherent", incoherent_rays(&tris, 65536)),
-        ("shadow", shadow_rays(&tris, 65536)),
+        ("primary", primary_rays(view, 256, 256)),
+        ("incoherent", incoherent_rays(tris, view, 65536)),
+        ("shadow", shadow_rays(tris, view, 65536)),
     ];
     for (case, rays) in &ray_sets {
         let shadow = *case == "shadow";
@@ -253,10 +327,14 @@ fn bench_size(c: &mut Criterion, label: &str, n: usize, samples: usize) {
         let orays: Vec<ORay> = rays.iter().map(|r| to_oray(r, t_max)).collect();
         // Sanity: both libraries see (almost) the same hits; the triangle
         // tests differ (watertight vs Möller-Trumbore), so edges may differ.
+        // obvhs 0.4 also clamps each child box's entry t to an absolute 1e-4
+        // (`cwbvh::node::EPSILON`), so on models in small units (the bunny is
+        // 0.15 wide, MetalRoughSpheres 0.01) it misses hits that close to the
+        // origin, mostly incoherent rays leaving the surface.
         let (gh, oh) = if shadow {
             (
                 rays.iter()
-                    .filter(|r| glint_occluded(&bvh, &tris, r))
+                    .filter(|r| glint_occluded(&bvh, tris, r))
                     .count(),
                 orays
                     .iter()
@@ -266,7 +344,7 @@ fn bench_size(c: &mut Criterion, label: &str, n: usize, samples: usize) {
         } else {
             (
                 rays.iter()
-                    .filter_map(|r| glint_closest(&bvh, &tris, r))
+                    .filter_map(|r| glint_closest(&bvh, tris, r))
                     .count(),
                 orays
                     .iter()
@@ -282,16 +360,16 @@ fn bench_size(c: &mut Criterion, label: &str, n: usize, samples: usize) {
         let mut g = c.benchmark_group(format!("{case}/{label}"));
         g.sample_size(samples)
             .warm_up_time(Duration::from_millis(500))
-            .measurement_time(Duration::from_secs(2))
+            .measurement_time(budget.trace_time)
             .throughput(Throughput::Elements(rays.len() as u64));
         g.bench_function(BenchmarkId::new("glint", label), |b| {
             b.iter(|| {
                 let mut hits = 0u32;
                 for r in rays {
                     hits += if shadow {
-                        glint_occluded(&bvh, &tris, r) as u32
+                        glint_occluded(&bvh, tris, r) as u32
                     } else {
-                        glint_closest(&bvh, &tris, r).is_some() as u32
+                        glint_closest(&bvh, tris, r).is_some() as u32
                     };
                 }
                 hits
@@ -314,9 +392,98 @@ fn bench_size(c: &mut Criterion, label: &str, n: usize, samples: usize) {
     }
 }
 
+/// The first file in `dir` whose name ends with `.{ext}` (in name order).
+fn find_file(dir: &Path, ext: &str) -> Result<PathBuf, String> {
+    let mut files: Vec<PathBuf> = std::fs::read_dir(dir)
+        .map_err(|e| format!("{}: {e}", dir.display()))?
+        .filter_map(|e| e.ok().map(|e| e.path()))
+        .filter(|p| p.extension().is_some_and(|e| e.eq_ignore_ascii_case(ext)))
+        .collect();
+    files.sort();
+    files
+        .into_iter()
+        .next()
+        .ok_or_else(|| format!("no .{ext} file in {}", dir.display()))
+}
+
+/// World-space triangles exactly as glint renders them: the model imported
+/// by glint's own importer, flattened by its Prepare schedule.
+fn load_model(path: &Path) -> Result<Vec<[Vec3; 3]>, String> {
+    let mut renderer = glint::Renderer::from_file(path, &Default::default())
+        .and_then(|mut r| r.prepare().map(|()| r))
+        .map_err(|e| e.to_string())?;
+    let mut geometry = renderer
+        .world
+        .resource_mut::<glint::accel::scene::SceneGeometry>();
+    Ok(std::mem::take(&mut geometry.tri_positions))
+}
+
+fn bench_models(c: &mut Criterion) {
+    let assets = Path::new(concat!(env!("CARGO_MANIFEST_DIR"), "/../shared/assets"));
+    if !assets.is_dir() {
+        eprintln!(
+            "skipping the real-model BVH benchmarks: {} is absent",
+            assets.display()
+        );
+        return;
+    }
+    let small = Budget {
+        samples: 20,
+        build_time: Duration::from_secs(3),
+        trace_time: Duration::from_secs(2),
+    };
+    let large = Budget {
+        samples: 10,
+        build_time: Duration::from_secs(3),
+        trace_time: Duration::from_secs(2),
+    };
+    let models = [
+        ("bunny", "classic/stanford-bunny", "obj", &small),
+        ("sponza", "classic/sponza-dabrovic", "obj", &small),
+        (
+            "mrspheres",
+            "khronos-gltf/MetalRoughSpheresNoTextures/glTF-Binary",
+            "glb",
+            &large,
+        ),
+    ];
+    for (label, dir, ext, budget) in models {
+        let tris = match find_file(&assets.join(dir), ext).and_then(|p| load_model(&p)) {
+            Ok(tris) if !tris.is_empty() => tris,
+            Ok(_) => {
+                eprintln!("skipping {label}: no triangles");
+                continue;
+            }
+            Err(e) => {
+                eprintln!("skipping {label}: {e}");
+                continue;
+            }
+        };
+        bench_mesh(c, label, &tris, &View::framing(&tris), budget);
+    }
+}
+
 fn benches(c: &mut Criterion) {
-    bench_size(c, "100k", 224, 20);
-    bench_size(c, "1M", 708, 10);
+    let budget = |samples, build_secs| Budget {
+        samples,
+        build_time: Duration::from_secs(build_secs),
+        trace_time: Duration::from_secs(2),
+    };
+    bench_mesh(
+        c,
+        "100k",
+        &displaced_sphere(224),
+        &View::sphere(),
+        &budget(20, 5),
+    );
+    bench_mesh(
+        c,
+        "1M",
+        &displaced_sphere(708),
+        &View::sphere(),
+        &budget(10, 5),
+    );
+    bench_models(c);
 }
 
 criterion_group!(bvh, benches);
