@@ -2,7 +2,6 @@
 //! closed test meshes.
 
 use glam::{Vec3, vec3};
-use std::collections::HashMap;
 
 /// Small deterministic generator so the tests need no extra crate.
 pub struct Lcg(pub u64);
@@ -76,65 +75,11 @@ pub fn cube(min: Vec3, max: Vec3) -> Mesh {
     Mesh { verts, tris }
 }
 
-/// A unit icosphere with shared vertices, subdivided `levels` times.
+/// A unit icosphere with shared vertices, subdivided `levels` times (the scene's own shape).
 pub fn icosphere(levels: u32) -> Mesh {
-    let t = (1.0 + 5.0f32.sqrt()) / 2.0;
-    let mut verts: Vec<Vec3> = [
-        (-1.0, t, 0.0),
-        (1.0, t, 0.0),
-        (-1.0, -t, 0.0),
-        (1.0, -t, 0.0),
-        (0.0, -1.0, t),
-        (0.0, 1.0, t),
-        (0.0, -1.0, -t),
-        (0.0, 1.0, -t),
-        (t, 0.0, -1.0),
-        (t, 0.0, 1.0),
-        (-t, 0.0, -1.0),
-        (-t, 0.0, 1.0),
-    ]
-    .iter()
-    .map(|&(x, y, z)| vec3(x, y, z).normalize())
-    .collect();
-    let mut tris: Vec<[u32; 3]> = vec![
-        [0, 11, 5],
-        [0, 5, 1],
-        [0, 1, 7],
-        [0, 7, 10],
-        [0, 10, 11],
-        [1, 5, 9],
-        [5, 11, 4],
-        [11, 10, 2],
-        [10, 7, 6],
-        [7, 1, 8],
-        [3, 9, 4],
-        [3, 4, 2],
-        [3, 2, 6],
-        [3, 6, 8],
-        [3, 8, 9],
-        [4, 9, 5],
-        [2, 4, 11],
-        [6, 2, 10],
-        [8, 6, 7],
-        [9, 8, 1],
-    ];
-    for _ in 0..levels {
-        let mut mid: HashMap<(u32, u32), u32> = HashMap::new();
-        let mut midpoint = |a: u32, b: u32, verts: &mut Vec<Vec3>| {
-            let key = (a.min(b), a.max(b));
-            *mid.entry(key).or_insert_with(|| {
-                verts.push(((verts[a as usize] + verts[b as usize]) * 0.5).normalize());
-                verts.len() as u32 - 1
-            })
-        };
-        let mut next = Vec::with_capacity(tris.len() * 4);
-        for [a, b, c] in tris {
-            let ab = midpoint(a, b, &mut verts);
-            let bc = midpoint(b, c, &mut verts);
-            let ca = midpoint(c, a, &mut verts);
-            next.extend([[a, ab, ca], [b, bc, ab], [c, ca, bc], [ab, bc, ca]]);
-        }
-        tris = next;
+    let m = crate::scene::shapes::icosphere(levels);
+    Mesh {
+        verts: m.vertices.iter().map(|v| v.position).collect(),
+        tris: m.triangles,
     }
-    Mesh { verts, tris }
 }
