@@ -206,26 +206,27 @@ struct ShadeContext<'a> {
     queue_shadows: bool,
 }
 
-/// Direct light at ray `i`'s hit (or the background on a miss) and its shadow rays;
-/// `seen(sample, contribution, shadow ray index within this ray's list)` observes every
-/// light sample (a no-op in a render, the trace log in a debug run).
+/// Direct light at ray `i`'s hit (or the background on a miss); its shadow rays are
+/// appended to `shadows`. `seen(sample, contribution, shadow ray index within this ray's
+/// rays)` observes every light sample (a no-op in a render, the trace log in a debug run).
 fn shade_ray(
     cx: &ShadeContext,
     i: usize,
     q: &QueuedRay,
     hit: &Option<Surface>,
+    shadows: &mut Vec<ShadowRay>,
     mut seen: impl FnMut(LightSample, Vec3, Option<u32>),
-) -> (Vec3, Vec<ShadowRay>) {
+) -> Vec3 {
     let s = cx.settings;
     let Some(surface) = hit else {
-        return (q.weight * s.background, Vec::new());
+        return q.weight * s.background;
     };
+    let first_shadow = shadows.len();
     let m = &cx.materials.list[surface.material as usize];
     let w = q.weight * blend_alpha(s, m.alpha, cx.depth);
     let kd = cx.materials.kd_at(surface.material, surface.uv);
     let v = -q.ray.dir.normalize();
     let mut direct = Vec3::ZERO;
-    let mut shadows = Vec::new();
     let key = (
         cx.region.first_pixel + q.slot,
         cx.region.sample,
@@ -251,7 +252,7 @@ fn shade_ray(
                 return;
             }
             if cx.queue_shadows {
-                seen(ls, c, Some(shadows.len() as u32));
+                seen(ls, c, Some((shadows.len() - first_shadow) as u32));
                 shadows.push(ShadowRay {
                     ray: surface.shadow_ray_to(ls.position),
                     contribution: c,
@@ -262,7 +263,7 @@ fn shade_ray(
                 direct += c;
             }
         });
-    (direct, shadows)
+    direct
 }
 
 /// Shades every hit: direct light from every light sample, either added at once
@@ -294,36 +295,57 @@ pub fn shade_hits(
         depth: wf.depth,
         queue_shadows: plan.shadow_rays,
     };
-    let results: Vec<(Vec3, Vec<ShadowRay>)> = match debug {
-        None => wf
-            .rays
-            .par_iter()
-            .zip(wf.hits.par_iter())
-            .enumerate()
-            .with_min_len(CHUNK)
-            .map(|(i, (q, hit))| shade_ray(&cx, i, q, hit, |_, _, _| {}))
-            .collect(),
+    let (radiance, shadow_rays) = match debug {
+        // Chunks, not rays, own the shadow-ray vectors: no allocation per ray, and the
+        // concatenation in chunk order keeps the queue deterministic.
+        None => {
+            let chunks: Vec<(Vec<Vec3>, Vec<ShadowRay>)> = wf
+                .rays
+                .par_chunks(CHUNK)
+                .zip(wf.hits.par_chunks(CHUNK))
+                .enumerate()
+                .map(|(c, (rays, hits))| {
+                    let mut shadows = Vec::new();
+                    let radiance = rays
+                        .iter()
+                        .zip(hits)
+                        .enumerate()
+                        .map(|(k, (q, hit))| {
+                            shade_ray(&cx, c * CHUNK + k, q, hit, &mut shadows, |_, _, _| {})
+                        })
+                        .collect();
+                    (radiance, shadows)
+                })
+                .collect();
+            let mut radiance = Vec::with_capacity(wf.rays.len());
+            let mut shadow_rays = Vec::new();
+            for (r, s) in chunks {
+                radiance.extend(r);
+                shadow_rays.extend(s);
+            }
+            (radiance, shadow_rays)
+        }
         // The same shading, one ray after another, logging every light sample.
         Some(mut log) => {
             log.begin_light_samples();
-            let mut queued = 0u32;
-            let mut results = Vec::with_capacity(wf.rays.len());
+            let mut shadow_rays = Vec::new();
+            let mut radiance = Vec::with_capacity(wf.rays.len());
             for (i, (q, hit)) in wf.rays.iter().zip(&wf.hits).enumerate() {
-                let r = shade_ray(&cx, i, q, hit, |ls, c, shadow| {
-                    log.record_light_sample(i, ls, c, shadow.map(|k| queued + k));
-                });
-                queued += r.1.len() as u32;
-                results.push(r);
+                let queued = shadow_rays.len() as u32;
+                radiance.push(shade_ray(
+                    &cx,
+                    i,
+                    q,
+                    hit,
+                    &mut shadow_rays,
+                    |ls, c, shadow| {
+                        log.record_light_sample(i, ls, c, shadow.map(|k| queued + k));
+                    },
+                ));
             }
-            results
+            (radiance, shadow_rays)
         }
     };
-    let mut shadow_rays = Vec::new();
-    let mut radiance = Vec::with_capacity(results.len());
-    for (direct, shadows) in results {
-        radiance.push(direct);
-        shadow_rays.extend(shadows);
-    }
     stats.record(
         "shade_hits",
         wf.hits.iter().filter(|h| h.is_some()).count() as u64,
