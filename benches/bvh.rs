@@ -15,31 +15,11 @@ use criterion::{
 };
 use glam::{Vec3, Vec3A, vec3};
 use glint::accel::{Aabb, Bvh, Ray, RayShear, SplitMethod, intersect_triangle_sheared};
+use glint::test_util::Lcg;
 use obvhs::BvhBuildParams;
 use obvhs::cwbvh::{CwBvh, builder::build_cwbvh_from_tris};
 use obvhs::ray::{Ray as ORay, RayHit};
 use obvhs::triangle::Triangle;
-
-/// Deterministic generator (no extra dev-dependency).
-struct Lcg(u64);
-impl Lcg {
-    fn f(&mut self) -> f32 {
-        self.0 = self
-            .0
-            .wrapping_mul(6364136223846793005)
-            .wrapping_add(1442695040888963407);
-        ((self.0 >> 40) as f32) / (1u64 << 24) as f32
-    }
-    fn dir(&mut self) -> Vec3 {
-        loop {
-            let v = vec3(self.f(), self.f(), self.f()) * 2.0 - Vec3::ONE;
-            let l = v.length_squared();
-            if l > 1e-4 && l <= 1.0 {
-                return v / l.sqrt();
-            }
-        }
-    }
-}
 
 /// A lat-long sphere of `n × n` quads, displaced by a few sines and a little
 /// per-vertex noise, so that it has detail at several scales. Pole triangles
@@ -56,7 +36,7 @@ fn displaced_sphere(n: usize) -> Vec<[Vec3; 3]> {
             let r = 1.0
                 + 0.08 * (9.0 * theta).sin() * (7.0 * phi).cos()
                 + 0.03 * (31.0 * theta + 2.0).sin() * (29.0 * phi).sin()
-                + 0.004 * (rng.f() - 0.5);
+                + 0.004 * (rng.next_f32() - 0.5);
             verts.push(
                 r * vec3(
                     theta.sin() * phi.cos(),
@@ -160,8 +140,9 @@ fn surface_points(
 ) -> Vec<(Vec3, Vec3)> {
     (0..n)
         .map(|_| {
-            let [a, b, c] = tris[((rng.f() * tris.len() as f32) as usize).min(tris.len() - 1)];
-            let (mut u, mut v) = (rng.f(), rng.f());
+            let [a, b, c] =
+                tris[((rng.next_f32() * tris.len() as f32) as usize).min(tris.len() - 1)];
+            let (mut u, mut v) = (rng.next_f32(), rng.next_f32());
             if u + v > 1.0 {
                 (u, v) = (1.0 - u, 1.0 - v);
             }
@@ -181,7 +162,7 @@ fn incoherent_rays(tris: &[[Vec3; 3]], view: &View, n: usize) -> Vec<Ray> {
     surface_points(tris, n, view.star_centre, &mut rng)
         .into_iter()
         .map(|(p, nrm)| {
-            let side = if rng.f() < 0.5 { 1.0 } else { -1.0 };
+            let side = if rng.next_f32() < 0.5 { 1.0 } else { -1.0 };
             Ray::new(p + side * view.offset * nrm, rng.dir())
         })
         .collect()

@@ -19,6 +19,7 @@ pub mod scene;
 pub mod schedule;
 pub mod shade;
 pub mod stress;
+pub mod test_util;
 pub mod trace;
 
 pub use error::{GlintError, Result};

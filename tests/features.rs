@@ -11,6 +11,7 @@ use glint::accel::scene::{Hit, PrimKind, SceneGeometry};
 use glint::sampling::Sampler;
 use glint::scene::Settings;
 use glint::shade::{Shading, ShadingInput};
+use glint::test_util::Lcg;
 use glint::trace::lights::Lights;
 use glint::trace::materials::Materials;
 use glint::trace::surface::{SHADOW_EPSILON, Surface, surface_at};
@@ -144,31 +145,26 @@ impl Recursive<'_> {
     }
 }
 
-struct Lcg(u64);
-impl Lcg {
-    fn f(&mut self) -> f32 {
-        self.0 = self
-            .0
-            .wrapping_mul(6364136223846793005)
-            .wrapping_add(1442695040888963407);
-        (self.0 >> 40) as f32 / (1u64 << 24) as f32
-    }
-    fn v(&mut self, lo: f32, hi: f32) -> Vec3 {
-        Vec3::new(self.f(), self.f(), self.f()) * (hi - lo) + Vec3::splat(lo)
-    }
+/// A random vector in [lo, hi)^3.
+fn between(g: &mut Lcg, lo: f32, hi: f32) -> Vec3 {
+    g.vec() * (hi - lo) + Vec3::splat(lo)
 }
 
 fn random_scene(seed: u64) -> String {
     let mut g = Lcg(seed);
     let mut materials = Vec::new();
     for i in 0..4 {
-        let kd = g.v(0.1, 1.0);
-        let ks = if g.f() < 0.5 {
-            g.v(0.0, 0.8)
+        let kd = between(&mut g, 0.1, 1.0);
+        let ks = if g.next_f32() < 0.5 {
+            between(&mut g, 0.0, 0.8)
         } else {
             Vec3::ZERO
         };
-        let alpha = if g.f() < 0.5 { 0.2 + 0.6 * g.f() } else { 1.0 };
+        let alpha = if g.next_f32() < 0.5 {
+            0.2 + 0.6 * g.next_f32()
+        } else {
+            1.0
+        };
         materials.push(format!(
             "\"m{i}\": (kd: ({}, {}, {}), ks: ({}, {}, {}), shininess: {}, transparency: {alpha})",
             kd.x,
@@ -177,31 +173,31 @@ fn random_scene(seed: u64) -> String {
             ks.x,
             ks.y,
             ks.z,
-            1.0 + 30.0 * g.f()
+            1.0 + 30.0 * g.next_f32()
         ));
     }
     let mut entities = vec![
         "Mesh((material: Some(\"m0\"), geometry: Parallelogram(origin: (-3, -1, 3), edge_u: (6, 0, 0), edge_v: (0, 0, -6))))".to_string(),
     ];
     for i in 0..3 {
-        let c = g.v(-0.8, 0.8);
+        let c = between(&mut g, -0.8, 0.8);
         entities.push(format!(
             "Sphere((center: ({}, {}, {}), radius: {}, material: \"m{}\"))",
             c.x,
             c.y,
             c.z,
-            0.2 + 0.3 * g.f(),
+            0.2 + 0.3 * g.next_f32(),
             1 + i
         ));
-        let t = g.v(-0.8, 0.8);
+        let t = between(&mut g, -0.8, 0.8);
         entities.push(format!(
             "Mesh((material: Some(\"m{}\"), geometry: Cube, transform: (translate: ({}, {}, {}), rotate_degrees: ({}, {}, 0), scale: (0.4, 0.4, 0.4))))",
             (i + 2) % 4,
             t.x,
             t.y,
             t.z,
-            90.0 * g.f(),
-            90.0 * g.f()
+            90.0 * g.next_f32(),
+            90.0 * g.next_f32()
         ));
     }
     entities.push("PointLight((position: (1, 3, 2), color: (0.8, 0.8, 0.8)))".into());

@@ -235,7 +235,7 @@ impl Bvh {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::accel::test_util::Lcg;
+    use crate::test_util::Lcg;
     use glam::vec3;
 
     /// Boxes of `n` random small triangles in [-5, 5]³.

@@ -16,9 +16,6 @@ pub mod sphere;
 pub mod traverse;
 pub mod triangle;
 
-#[cfg(test)]
-mod test_util;
-
 pub use aabb::Aabb;
 pub use bvh::{Bvh, BvhNode, SplitMethod};
 pub use sphere::intersect_sphere;

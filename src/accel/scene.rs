@@ -207,7 +207,7 @@ impl SceneGeometry {
         visitor: &mut impl TraversalVisitor,
     ) -> Vec3 {
         // (t, material, uv) of every transparent surface crossed; opaque ones stop the walk.
-        let mut crossings: Vec<(f32, u32, Vec2)> = Vec::new();
+        let mut crossings = Crossings::default();
         let opaque = |material: u32| materials.list[material as usize].alpha >= 1.0;
         if !self.tri_bvh.nodes.is_empty() {
             let blocked = self.tri_bvh.any_hit(ray, t_max, visitor, |p| {
@@ -256,10 +256,10 @@ impl SceneGeometry {
                 return Vec3::ZERO;
             }
         }
-        crossings.sort_by(|a, b| a.0.total_cmp(&b.0));
+        let crossings = crossings.sorted();
         let mut tint = Vec3::ONE;
         let mut previous: Option<(f32, u32)> = None;
-        for (t, material, uv) in crossings {
+        for &(t, material, uv) in crossings {
             let twin = previous.is_some_and(|(pt, pm)| pm == material && t - pt <= 1e-5 * t);
             previous = Some((t, material));
             if twin {
@@ -282,6 +282,41 @@ impl SceneGeometry {
             b = b.union(self.sphere_bvh.bounds());
         }
         b
+    }
+}
+
+/// A transparent surface a shadow ray crosses: (t, material, texture coordinate).
+type Crossing = (f32, u32, Vec2);
+
+/// Crossings of one shadow ray: the first few inline, so that the common case (a handful
+/// of glass surfaces) costs no allocation per ray; more spill to the heap.
+#[derive(Default)]
+struct Crossings {
+    inline: [Crossing; 8],
+    len: usize,
+    spill: Vec<Crossing>,
+}
+
+impl Crossings {
+    fn push(&mut self, c: Crossing) {
+        if self.len < self.inline.len() {
+            self.inline[self.len] = c;
+            self.len += 1;
+        } else {
+            self.spill.push(c);
+        }
+    }
+
+    /// All crossings in order of t.
+    fn sorted(&mut self) -> &[Crossing] {
+        let all = if self.spill.is_empty() {
+            &mut self.inline[..self.len]
+        } else {
+            self.spill.extend_from_slice(&self.inline[..self.len]);
+            &mut self.spill[..]
+        };
+        all.sort_unstable_by(|a, b| a.0.total_cmp(&b.0));
+        all
     }
 }
 

@@ -210,8 +210,8 @@ impl Bvh {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::accel::test_util::Lcg;
     use crate::accel::{Aabb, RayShear, SplitMethod, intersect_triangle_sheared};
+    use crate::test_util::Lcg;
     use glam::{Vec3, vec3};
 
     type Tri = [Vec3; 3];

@@ -230,7 +230,7 @@ mod tests {
     use super::*;
     use glam::vec3;
 
-    use crate::accel::test_util::{Lcg, Mesh, cube, icosphere};
+    use crate::test_util::{Lcg, Mesh, cube, icosphere};
 
     const V0: Vec3 = Vec3::new(0.0, 0.0, 0.0);
     const V1: Vec3 = Vec3::new(1.0, 0.0, 0.0);

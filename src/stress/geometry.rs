@@ -10,35 +10,8 @@ use crate::accel::{Aabb, Bvh, Ray, SplitMethod};
 use crate::render::Renderer;
 use crate::scene::components::MeshData;
 use crate::scene::{Sphere, parse_scene, shapes};
+pub use crate::test_util::Lcg;
 use crate::trace::surface::surface_at;
-
-/// A small deterministic generator (the stress cases need no extra crate).
-pub struct Lcg(pub u64);
-
-impl Lcg {
-    /// Uniform in [0, 1).
-    pub fn f32(&mut self) -> f32 {
-        self.0 = self
-            .0
-            .wrapping_mul(6364136223846793005)
-            .wrapping_add(1442695040888963407);
-        ((self.0 >> 40) as f32) / (1u64 << 24) as f32
-    }
-    /// Uniform in the unit cube.
-    pub fn vec(&mut self) -> Vec3 {
-        Vec3::new(self.f32(), self.f32(), self.f32())
-    }
-    /// Uniform unit direction.
-    pub fn dir(&mut self) -> Vec3 {
-        loop {
-            let v = self.vec() * 2.0 - Vec3::ONE;
-            let l = v.length_squared();
-            if l > 1e-4 && l <= 1.0 {
-                return v / l.sqrt();
-            }
-        }
-    }
-}
 
 /// World-space triangles of `mesh` under `m`.
 fn place(mesh: &MeshData, m: Affine3A) -> Vec<[Vec3; 3]> {
@@ -113,7 +86,7 @@ fn edge_points(tris: &[[Vec3; 3]], rng: &mut Lcg, count: usize) -> Vec<Vec3> {
         for t in tris {
             for (p, q) in [(t[0], t[1]), (t[1], t[2]), (t[2], t[0])] {
                 pts.push(p);
-                for f in [0.5, 0.25, rng.f32(), rng.f32()] {
+                for f in [0.5, 0.25, rng.next_f32(), rng.next_f32()] {
                     pts.push(p.lerp(q, f));
                 }
             }
@@ -141,7 +114,7 @@ fn closed_mesh_misses(
     for &p in &pts {
         // From outside along a line through the centre (the mesh is convex): it crosses
         // the surface at p, so it must hit.
-        let o = centre + (p - centre) * (2.0 + rng.f32());
+        let o = centre + (p - centre) * (2.0 + rng.next_f32());
         rays.push(Ray::new(o, p - o));
         // From a random inside point through p.
         let o = centre + (rng.vec() - Vec3::splat(0.5)) * (0.1 * size);
@@ -277,7 +250,8 @@ pub fn axis_grazing(b: &Budget) -> Vec<Row> {
     ];
     let planes: Vec<f32> = tris.iter().flatten().flat_map(|p| p.to_array()).collect();
     let mut rng = Lcg(99);
-    let pick = |rng: &mut Lcg| planes[(rng.f32() * planes.len() as f32) as usize % planes.len()];
+    let pick =
+        |rng: &mut Lcg| planes[(rng.next_f32() * planes.len() as f32) as usize % planes.len()];
     // Brute force is O(triangles) per ray: a tenth of the budget per kind of ray.
     let n = b.rays / 10;
     let mut axis = Vec::with_capacity(n);
@@ -287,13 +261,13 @@ pub fn axis_grazing(b: &Budget) -> Vec<Row> {
         // Origins with coordinates snapped onto vertex (hence slab) planes.
         let mut o = rng.vec() * Vec3::new(8.0, 3.0, 8.0) - Vec3::new(4.0, 0.5, 4.0);
         for k in 0..3 {
-            if rng.f32() < 0.5 {
+            if rng.next_f32() < 0.5 {
                 o[k] = pick(&mut rng);
             }
         }
-        let k = (rng.f32() * 3.0) as usize % 3;
+        let k = (rng.next_f32() * 3.0) as usize % 3;
         let mut d = Vec3::ZERO;
-        d[k] = if rng.f32() < 0.5 { 1.0 } else { -1.0 };
+        d[k] = if rng.next_f32() < 0.5 { 1.0 } else { -1.0 };
         axis.push(Ray::new(o, d));
         let mut d = rng.dir();
         d[k] = 0.0;
@@ -310,9 +284,9 @@ pub fn axis_grazing(b: &Budget) -> Vec<Row> {
     let mut grazing = Vec::with_capacity(n);
     for i in 0..n {
         let h = 10f32.powf(-2.0 - 4.0 * (i as f32 / n as f32));
-        let a = rng.f32() * std::f32::consts::TAU;
+        let a = rng.next_f32() * std::f32::consts::TAU;
         let horizontal = Vec3::new(a.cos(), 0.0, a.sin());
-        let target = Vec3::new(rng.f32() - 0.5, 0.0, rng.f32() - 0.5) * 2.0;
+        let target = Vec3::new(rng.next_f32() - 0.5, 0.0, rng.next_f32() - 0.5) * 2.0;
         let o = target - 4.0 * horizontal + Vec3::new(0.0, h, 0.0);
         grazing.push(Ray::new(o, target - o));
     }
@@ -469,8 +443,8 @@ pub fn degenerate(b: &Budget) -> Vec<Row> {
         for k in 0..b.rays / 64 {
             let target = match k % 4 {
                 0 => t[k % 3],
-                1 => t[0].lerp(t[1], rng.f32()),
-                2 => t[1].lerp(t[2], rng.f32()),
+                1 => t[0].lerp(t[1], rng.next_f32()),
+                2 => t[1].lerp(t[2], rng.next_f32()),
                 _ => t[0].lerp(t[2], 0.5),
             };
             let o = target + rng.dir() * 3.0;

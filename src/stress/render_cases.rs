@@ -8,7 +8,6 @@ use std::sync::Arc;
 use bevy_ecs::prelude::*;
 use glam::{Vec2, Vec3};
 
-use super::geometry::Lcg;
 use super::reference::{Prim, RefScene};
 use super::{Budget, Rendered, Row, render, render_ron, v3};
 use crate::accel::{Ray, intersect_sphere};
@@ -19,6 +18,7 @@ use crate::scene::{
     parse_scene,
 };
 use crate::shade::texture::{Texture, WrapMode};
+use crate::test_util::Lcg;
 
 /// A scene with a camera, settings, materials and entities (RON fragments).
 fn scene(camera: &str, settings: &str, materials: &str, entities: &str) -> String {

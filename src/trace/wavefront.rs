@@ -402,6 +402,28 @@ pub fn gather_radiance(mut wf: ResMut<Wavefront>, debug: Option<ResMut<DebugTrac
     }
 }
 
+/// The child rays of every hit for which `make` gives a ray and a weight, in queue
+/// order; `branch` (1 reflection, 2 pass-through) numbers the child in the ray tree.
+fn spawn_children(
+    wf: &Wavefront,
+    branch: u32,
+    make: impl Fn(&QueuedRay, &Surface) -> Option<(Ray, Vec3)>,
+) -> Vec<QueuedRay> {
+    wf.rays
+        .iter()
+        .zip(&wf.hits)
+        .filter_map(|(q, hit)| {
+            let (ray, weight) = make(q, hit.as_ref()?)?;
+            Some(QueuedRay {
+                ray,
+                weight,
+                slot: q.slot,
+                path: q.path.wrapping_mul(2).wrapping_add(branch),
+            })
+        })
+        .collect()
+}
+
 /// Queues `ks`-weighted reflection rays for the next depth.
 pub fn spawn_reflection_rays(
     settings: Res<Settings>,
@@ -413,22 +435,11 @@ pub fn spawn_reflection_rays(
         return;
     }
     let depth = wf.depth;
-    let spawned: Vec<QueuedRay> = wf
-        .rays
-        .iter()
-        .zip(&wf.hits)
-        .filter_map(|(q, hit)| {
-            let surface = hit.as_ref()?;
-            let m = &materials.list[surface.material as usize];
-            let weight = q.weight * blend_alpha(&settings, m.alpha, depth) * m.ks;
-            (weight != Vec3::ZERO).then(|| QueuedRay {
-                ray: surface.reflection_ray(q.ray.dir),
-                weight,
-                slot: q.slot,
-                path: q.path.wrapping_mul(2).wrapping_add(1),
-            })
-        })
-        .collect();
+    let spawned = spawn_children(&wf, 1, |q, surface| {
+        let m = &materials.list[surface.material as usize];
+        let weight = q.weight * blend_alpha(&settings, m.alpha, depth) * m.ks;
+        (weight != Vec3::ZERO).then(|| (surface.reflection_ray(q.ray.dir), weight))
+    });
     stats.record("spawn_reflection_rays", spawned.len() as u64);
     stats.rays.reflection += spawned.len() as u64;
     wf.next.extend(spawned);
@@ -444,22 +455,12 @@ pub fn spawn_pass_through_rays(
     if wf.depth >= settings.max_depth {
         return;
     }
-    let spawned: Vec<QueuedRay> = wf
-        .rays
-        .iter()
-        .zip(&wf.hits)
-        .filter_map(|(q, hit)| {
-            let surface = hit.as_ref()?;
-            let alpha = materials.list[surface.material as usize].alpha;
-            let weight = q.weight * (1.0 - alpha);
-            (alpha != 1.0 && weight != Vec3::ZERO).then(|| QueuedRay {
-                ray: surface.pass_through_ray(q.ray.dir),
-                weight,
-                slot: q.slot,
-                path: q.path.wrapping_mul(2).wrapping_add(2),
-            })
-        })
-        .collect();
+    let spawned = spawn_children(&wf, 2, |q, surface| {
+        let alpha = materials.list[surface.material as usize].alpha;
+        let weight = q.weight * (1.0 - alpha);
+        (alpha != 1.0 && weight != Vec3::ZERO)
+            .then(|| (surface.pass_through_ray(q.ray.dir), weight))
+    });
     stats.record("spawn_pass_through_rays", spawned.len() as u64);
     stats.rays.pass_through += spawned.len() as u64;
     wf.next.extend(spawned);

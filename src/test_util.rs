@@ -1,9 +1,10 @@
-//! Shared helpers for the accel unit tests: a tiny deterministic RNG and
-//! closed test meshes.
+//! Generators shared by unit tests, system tests, the stress suite and the benchmarks:
+//! a tiny deterministic random stream and closed test meshes. (Rendering never uses the
+//! stream: its random numbers are counter-based, see `sampling`.)
 
 use glam::{Vec3, vec3};
 
-/// Small deterministic generator so the tests need no extra crate.
+/// Small deterministic random stream (a 64-bit LCG), so tests need no extra crate.
 pub struct Lcg(pub u64);
 
 impl Lcg {
@@ -33,11 +34,14 @@ impl Lcg {
 
 /// An indexed triangle mesh.
 pub struct Mesh {
+    /// Vertex positions.
     pub verts: Vec<Vec3>,
+    /// Vertex index triples.
     pub tris: Vec<[u32; 3]>,
 }
 
 impl Mesh {
+    /// The corners of triangle `i`.
     pub fn tri(&self, i: usize) -> (Vec3, Vec3, Vec3) {
         let [a, b, c] = self.tris[i];
         (
