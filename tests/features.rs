@@ -15,7 +15,7 @@ use glint::test_util::Lcg;
 use glint::trace::lights::Lights;
 use glint::trace::materials::Materials;
 use glint::trace::surface::{SHADOW_EPSILON, Surface, surface_at};
-use glint::trace::wavefront::{blend_alpha, camera_ray};
+use glint::trace::wavefront::camera_ray;
 
 // ---------------------------------------------------------------- recursion
 
@@ -256,7 +256,6 @@ fn a_plain_recursive_evaluator_agrees_with_the_wavefront() {
         }
         assert!(worst <= 1e-5, "seed {seed}: worst pixel differs by {worst}");
         assert!(r.stats().rays.reflection > 0 && r.stats().rays.pass_through > 0);
-        let _ = blend_alpha(settings, 1.0, 0);
     }
 }
 

@@ -81,16 +81,47 @@ pub struct Wavefront {
 
 /// The camera's ray through image-plane position `(x, y)` in pixels (row 0 at the top).
 pub fn camera_ray(camera: &Camera, x: f32, y: f32) -> Ray {
-    let forward = (camera.look_at - camera.position).normalize();
-    let right = forward.cross(camera.up).normalize();
-    let up = right.cross(forward);
-    let tan = (camera.fov_y_degrees.to_radians() * 0.5).tan();
-    let aspect = camera.width as f32 / camera.height as f32;
-    let sx = (2.0 * x / camera.width as f32 - 1.0) * tan * aspect;
-    let sy = (1.0 - 2.0 * y / camera.height as f32) * tan;
-    Ray {
-        origin: camera.position,
-        dir: (forward + sx * right + sy * up).normalize(),
+    CameraBasis::new(camera).ray(x, y)
+}
+
+/// A camera's frame, computed once per pass rather than once per ray.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct CameraBasis {
+    origin: Vec3,
+    forward: Vec3,
+    right: Vec3,
+    up: Vec3,
+    tan: f32,
+    aspect: f32,
+    width: f32,
+    height: f32,
+}
+
+impl CameraBasis {
+    /// The frame of `camera`.
+    pub fn new(camera: &Camera) -> Self {
+        let forward = (camera.look_at - camera.position).normalize();
+        let right = forward.cross(camera.up).normalize();
+        Self {
+            origin: camera.position,
+            forward,
+            right,
+            up: right.cross(forward),
+            tan: (camera.fov_y_degrees.to_radians() * 0.5).tan(),
+            aspect: camera.width as f32 / camera.height as f32,
+            width: camera.width as f32,
+            height: camera.height as f32,
+        }
+    }
+
+    /// The ray through image-plane position `(x, y)` in pixels (row 0 at the top).
+    pub fn ray(&self, x: f32, y: f32) -> Ray {
+        let sx = (2.0 * x / self.width - 1.0) * self.tan * self.aspect;
+        let sy = (1.0 - 2.0 * y / self.height) * self.tan;
+        Ray {
+            origin: self.origin,
+            dir: (self.forward + sx * self.right + sy * self.up).normalize(),
+        }
     }
 }
 
@@ -111,6 +142,7 @@ pub fn generate_camera_samples(
     let n = samples_taken(settings.pixel_samples, settings.pixel_sampling);
     let (mode, patterns) = (settings.pixel_sampling, plan.pixel_patterns);
     let width = camera.width;
+    let basis = CameraBasis::new(camera);
     let offset_of = |slot: u32| {
         if patterns {
             pixel_sample_offset(&sampler, region.first_pixel + slot, region.sample, n, mode)
@@ -126,7 +158,7 @@ pub fn generate_camera_samples(
             let offset = offset_of(slot);
             let (x, y) = ((pixel % width) as f32, (pixel / width) as f32);
             QueuedRay {
-                ray: camera_ray(camera, x + offset.x, y + offset.y),
+                ray: basis.ray(x + offset.x, y + offset.y),
                 weight: Vec3::ONE,
                 slot,
                 path: 0,
