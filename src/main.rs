@@ -227,6 +227,15 @@ fn render(args: &RenderArgs) -> Result<Option<Interrupted>> {
             )));
         }
     }
+    if let Some(dir) = output.parent().filter(|d| !d.as_os_str().is_empty())
+        && !dir.is_dir()
+    {
+        return Err(GlintError::Usage(format!(
+            "{}: the output folder {} does not exist",
+            output.display(),
+            dir.display()
+        )));
+    }
     let mut renderer = Renderer::from_file(&args.scene.scene, &overrides(&args.scene))?;
     for w in renderer.warnings() {
         eprintln!("warning: {w}");

@@ -214,6 +214,15 @@ fn the_cli_rejects_unknown_settings_and_output_formats() {
     let (ok, stderr, _) = run_cli(Some(GOOD), &["render", "scene.ron", "-o", "out.jpg"]);
     assert!(!ok);
     assert!(stderr.contains("unknown output format"), "{stderr}");
+    let (ok, stderr, _) = run_cli(
+        Some(GOOD),
+        &["render", "scene.ron", "-o", "no/such/out.png"],
+    );
+    assert!(!ok);
+    assert!(
+        stderr.contains("output folder no/such does not exist"),
+        "{stderr}"
+    );
 }
 
 #[test]
