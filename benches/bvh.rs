@@ -395,7 +395,7 @@ fn load_model(path: &Path) -> Result<Vec<[Vec3; 3]>, String> {
         .map_err(|e| e.to_string())?;
     let mut geometry = renderer
         .world
-        .resource_mut::<glint::accel::scene::SceneGeometry>();
+        .resource_mut::<glint::trace::geometry::SceneGeometry>();
     Ok(std::mem::take(&mut geometry.tri_positions))
 }
 

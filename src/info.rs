@@ -4,10 +4,10 @@ use std::fmt::Write;
 
 use bevy_ecs::prelude::*;
 
-use crate::accel::scene::SceneGeometry;
 use crate::error::Result;
 use crate::render::Renderer;
 use crate::scene::{Material, Mesh, ParallelogramLight, PointLight, SegmentLight, Sphere};
+use crate::trace::geometry::SceneGeometry;
 
 /// A human-readable report of the scene and its render plan (runs the prepare stage).
 pub fn describe(renderer: &mut Renderer) -> Result<String> {

@@ -18,6 +18,7 @@ pub mod sampling;
 pub mod scene;
 pub mod schedule;
 pub mod shade;
+pub mod stats;
 pub mod stress;
 pub mod test_util;
 pub mod trace;

@@ -12,14 +12,9 @@ use crate::film::Film;
 use crate::sampling::samples_taken;
 use crate::scene::format::SceneFile;
 use crate::scene::{Camera, SceneSource, Settings, read_scene, spawn_scene};
-use crate::schedule::{Prepare, RenderPass, add_render_schedules};
-use crate::trace::StageErrors;
+use crate::schedule::{PassControl, add_render_schedules, run_pass, run_passes, run_prepare};
+use crate::stats::RenderStats;
 use crate::trace::plan::RenderPlan;
-use crate::trace::stats::RenderStats;
-use crate::trace::wavefront::PassRegion;
-
-/// Pixels traced per wavefront: bounds the queues' memory for large images.
-pub const REGION_PIXELS: u32 = 1 << 16;
 
 /// Command-line changes to a scene.
 #[derive(Clone, Debug, Default)]
@@ -168,15 +163,7 @@ impl Renderer {
         samples_taken(s.pixel_samples, s.pixel_sampling)
     }
 
-    fn take_errors(&mut self) -> Result<()> {
-        let mut errors = self.world.resource_mut::<StageErrors>();
-        match errors.0.drain(..).next() {
-            Some(e) => Err(e),
-            None => Ok(()),
-        }
-    }
-
-    /// Runs the [`Prepare`] schedule once (analysis, tables, BVHs).
+    /// Runs the [`crate::schedule::Prepare`] schedule once (analysis, tables, BVHs).
     pub fn prepare(&mut self) -> Result<()> {
         if self.prepared {
             return Ok(());
@@ -187,9 +174,8 @@ impl Renderer {
             .ok_or_else(|| GlintError::Usage("the scene has no camera".into()))?;
         self.world
             .insert_resource(Film::new(camera.width, camera.height));
-        self.world.run_schedule(Prepare);
         self.prepared = true;
-        self.take_errors()
+        run_prepare(&mut self.world)
     }
 
     /// Stops renders when `flag` is set (e.g. by Ctrl-C): checked before every
@@ -205,32 +191,25 @@ impl Renderer {
             .is_some_and(|f| f.load(Ordering::Relaxed))
     }
 
+    /// Every pixel, as row-major indices.
+    fn all_pixels(&self) -> std::ops::Range<u32> {
+        let film = self.world.resource::<Film>();
+        0..film.width * film.height
+    }
+
     /// Traces sample index `sample` for every pixel, region by region; `progress`
     /// receives the pixels done after each region. An interrupt leaves the pass
     /// partial: the first regions hold one sample more than the others.
     pub fn render_pass(&mut self, sample: u32, progress: &mut dyn FnMut(u64)) -> Result<()> {
-        self.trace_pass(sample, progress).map(|_| ())
-    }
-
-    /// [`Renderer::render_pass`], returning whether every region was traced.
-    fn trace_pass(&mut self, sample: u32, progress: &mut dyn FnMut(u64)) -> Result<bool> {
         self.prepare()?;
-        let film = self.world.resource::<Film>();
-        let pixels = film.width * film.height;
-        let mut first = 0;
-        while first < pixels && !self.interrupted() {
-            let count = REGION_PIXELS.min(pixels - first);
-            self.world.insert_resource(PassRegion {
-                sample,
-                first_pixel: first,
-                pixels: count,
-            });
-            self.world.run_schedule(RenderPass);
-            progress(count as u64);
-            first += count;
-        }
-        self.take_errors()?;
-        Ok(first == pixels)
+        let pixels = self.all_pixels();
+        let mut control = Control {
+            interrupt: self.interrupt.clone(),
+            budget: None,
+            start: Instant::now(),
+            progress,
+        };
+        run_pass(&mut self.world, sample, pixels, &mut control).map(|_| ())
     }
 
     /// Renders every sample of every pixel; stops early after a pass if `budget` is
@@ -246,19 +225,14 @@ impl Renderer {
         self.prepare()?;
         let start = self.started.unwrap_or_else(Instant::now);
         let n = self.samples_per_pixel();
-        let mut done = 0;
-        for sample in 0..n {
-            if self.interrupted() {
-                break;
-            }
-            if !self.trace_pass(sample, progress)? {
-                break;
-            }
-            done += 1;
-            if budget.is_some_and(|b| start.elapsed() >= b) {
-                break;
-            }
-        }
+        let pixels = self.all_pixels();
+        let mut control = Control {
+            interrupt: self.interrupt.clone(),
+            budget,
+            start,
+            progress,
+        };
+        let done = run_passes(&mut self.world, 0..n, pixels, &mut control)?;
         let mut summary = self.summary(done, start.elapsed());
         summary.interrupted = done < n && self.interrupted();
         Ok(summary)
@@ -295,5 +269,31 @@ impl Renderer {
     /// The plan (valid after [`Renderer::prepare`]).
     pub fn plan(&self) -> &RenderPlan {
         self.world.resource::<RenderPlan>()
+    }
+}
+
+/// The render driver's answers to the pass loop: an interrupt flag, a time budget, a
+/// progress callback.
+struct Control<'a> {
+    interrupt: Option<Arc<AtomicBool>>,
+    budget: Option<Duration>,
+    start: Instant,
+    progress: &'a mut dyn FnMut(u64),
+}
+
+impl PassControl for Control<'_> {
+    fn proceed(&mut self) -> bool {
+        !self
+            .interrupt
+            .as_ref()
+            .is_some_and(|f| f.load(Ordering::Relaxed))
+    }
+
+    fn region_done(&mut self, pixels: u64) {
+        (self.progress)(pixels);
+    }
+
+    fn another_pass(&mut self) -> bool {
+        !self.budget.is_some_and(|b| self.start.elapsed() >= b)
     }
 }

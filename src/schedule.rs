@@ -4,26 +4,34 @@
 //! Prepare (once):  analyse_scene
 //!                  -> gather_materials, gather_lights -> decode_textures?
 //!                  -> build_triangle_bvh?, build_sphere_bvh?
-//! RenderPass (per sample index and image region):
-//!                  generate_camera_samples -> trace_wavefronts -> accumulate_film
-//! Bounce (per depth level, run by trace_wavefronts while rays remain):
-//!                  intersect_rays -> shade_hits -> trace_shadow_rays? -> gather_radiance
+//! for each pass (sample index)                                   run_passes
+//!   for each region of at most REGION_PIXELS pixels              run_pass
+//!     RenderPass:  generate_camera_samples -> trace_wavefronts -> accumulate_film
+//!     for each depth level while rays remain                     trace_wavefronts
+//!       Bounce:    intersect_rays -> shade_hits -> trace_shadow_rays? -> gather_radiance
 //!                  -> spawn_reflection_rays?, spawn_pass_through_rays? -> advance_depth
 //! ```
 //! A `?` stage has a run condition read from the [`RenderPlan`] that `analyse_scene`
-//! decides once; `glint info` prints that plan with its reasons.
+//! decides once; `glint info` prints that plan with its reasons. Drivers (`render`,
+//! `debug`, `converge`) call [`run_passes`] or [`run_pass`]; a debug run adds observer
+//! systems to these schedules, a normal render has none.
+
+use std::ops::Range;
 
 use bevy_ecs::prelude::*;
 use bevy_ecs::schedule::ScheduleLabel;
 
-use crate::accel::scene::{SceneGeometry, build_sphere_bvh, build_triangle_bvh};
+use crate::error::Result;
 use crate::film::{Film, accumulate_film};
+pub use crate::stats::{RenderStats, Stage, StageErrors};
+use crate::trace::geometry::{SceneGeometry, build_sphere_bvh, build_triangle_bvh};
 use crate::trace::lights::{Lights, gather_lights};
 use crate::trace::materials::{Materials, decode_textures, gather_materials};
 use crate::trace::plan::{RenderPlan, analyse_scene};
-use crate::trace::stats::RenderStats;
 use crate::trace::wavefront::*;
-use crate::trace::{StageErrors, trace_wavefronts};
+
+/// Pixels traced per wavefront: bounds the queues' memory for large images.
+pub const REGION_PIXELS: u32 = 1 << 16;
 
 /// Runs once per render: analysis, tables, acceleration structures.
 #[derive(ScheduleLabel, Clone, Debug, PartialEq, Eq, Hash)]
@@ -140,6 +148,91 @@ pub fn bounce_schedule() -> Schedule {
     s
 }
 
+/// What the pass and region loops ask of the driver that runs them.
+pub trait PassControl {
+    /// Asked before every region: `false` stops the loops (an interrupt). The region in
+    /// flight always finishes, so the film stays consistent.
+    fn proceed(&mut self) -> bool {
+        true
+    }
+    /// Told after every region how many pixels it traced (a progress bar).
+    fn region_done(&mut self, _pixels: u64) {}
+    /// Asked after every complete pass: `false` ends the run there (a time budget).
+    fn another_pass(&mut self) -> bool {
+        true
+    }
+}
+
+/// A driver that traces everything it is given.
+impl PassControl for () {}
+
+/// The pass loop: sample indices `samples` over the pixels `pixels` (row-major
+/// indices), pass after pass; returns the passes completed.
+pub fn run_passes(
+    world: &mut World,
+    samples: Range<u32>,
+    pixels: Range<u32>,
+    control: &mut dyn PassControl,
+) -> Result<u32> {
+    let mut done = 0;
+    for sample in samples {
+        if !run_pass(world, sample, pixels.clone(), control)? {
+            break;
+        }
+        done += 1;
+        if !control.another_pass() {
+            break;
+        }
+    }
+    Ok(done)
+}
+
+/// The region loop: one sample index over `pixels`, [`REGION_PIXELS`] at a time;
+/// returns whether every region was traced. An interrupt leaves the pass partial: the
+/// first regions then hold one sample more than the others.
+pub fn run_pass(
+    world: &mut World,
+    sample: u32,
+    pixels: Range<u32>,
+    control: &mut dyn PassControl,
+) -> Result<bool> {
+    let mut first = pixels.start;
+    while first < pixels.end && control.proceed() {
+        let count = REGION_PIXELS.min(pixels.end - first);
+        world.insert_resource(PassRegion {
+            sample,
+            first_pixel: first,
+            pixels: count,
+        });
+        world.run_schedule(RenderPass);
+        control.region_done(count as u64);
+        first += count;
+    }
+    take_stage_errors(world)?;
+    Ok(first >= pixels.end)
+}
+
+/// The depth loop: runs the [`Bounce`] schedule once per depth level until no rays remain.
+pub fn trace_wavefronts(world: &mut World) {
+    while rays_pending(world.resource::<Wavefront>()) {
+        world.run_schedule(Bounce);
+    }
+}
+
+/// Runs the [`Prepare`] schedule and reports the first error a stage raised.
+pub fn run_prepare(world: &mut World) -> Result<()> {
+    world.run_schedule(Prepare);
+    take_stage_errors(world)
+}
+
+/// The first error a stage raised since the last call, as an `Err`.
+fn take_stage_errors(world: &mut World) -> Result<()> {
+    match world.resource_mut::<StageErrors>().take_first() {
+        Some(e) => Err(e),
+        None => Ok(()),
+    }
+}
+
 /// Inserts the render schedules and the resources they use into `world`.
 pub fn add_render_schedules(world: &mut World) {
     world.init_resource::<RenderPlan>();
@@ -149,6 +242,7 @@ pub fn add_render_schedules(world: &mut World) {
     world.init_resource::<SceneGeometry>();
     world.init_resource::<Wavefront>();
     world.init_resource::<PassRegion>();
+    world.init_resource::<SampleRadiance>();
     world.init_resource::<Film>();
     world.init_resource::<StageErrors>();
     world.add_schedule(prepare_schedule());

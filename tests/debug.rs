@@ -6,7 +6,6 @@ use std::path::Path;
 use glam::{Vec2, Vec3};
 use glint::Renderer;
 use glint::accel::TraversalStats;
-use glint::accel::scene::SceneGeometry;
 use glint::debug::overlay::{Canvas, OverlayInput, draw_world};
 use glint::debug::{
     DebugEmit, DebugPrimitive, DebugRequest, DebugSession, DebugTrace, Feature, Shape, Values,
@@ -14,6 +13,7 @@ use glint::debug::{
 };
 use glint::scene::format::SceneFile;
 use glint::scene::{Camera, parse_scene, read_scene};
+use glint::trace::geometry::SceneGeometry;
 use glint::trace::wavefront::camera_ray;
 
 fn parse(text: &str) -> SceneFile {

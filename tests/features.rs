@@ -7,11 +7,12 @@ mod common;
 use common::*;
 use glam::{Vec2, Vec3};
 use glint::accel::Ray;
-use glint::accel::scene::{Hit, PrimKind, SceneGeometry};
 use glint::sampling::Sampler;
 use glint::scene::Settings;
 use glint::shade::{Shading, ShadingInput};
+use glint::stats::Stage;
 use glint::test_util::Lcg;
+use glint::trace::geometry::{Hit, PrimKind, SceneGeometry};
 use glint::trace::lights::Lights;
 use glint::trace::materials::Materials;
 use glint::trace::surface::{SHADOW_EPSILON, Surface, surface_at};
@@ -66,7 +67,7 @@ fn stacked_transparent_quads_blend_to_the_closed_form() {
         expected = alpha * direct + (1.0 - alpha) * expected;
     }
     assert_close(r.film().pixel(1, 1), expected, 1e-5);
-    assert!(r.stats().ran("spawn_pass_through_rays"));
+    assert!(r.stats().ran(Stage::SpawnPassThroughRays));
 }
 
 /// SPEC's recursive pseudo-code, written plainly with call-stack recursion, sharing only
@@ -541,20 +542,20 @@ fn the_plan_skips_what_each_scene_does_not_need() {
     let (p, s) = plan("cornell_box");
     assert!(p.reflections && !p.pass_through && !p.textures && !p.area_lights);
     assert!(!p.transparent_shadows && !p.pixel_patterns);
-    assert!(!s.ran("decode_textures") && !s.ran("spawn_pass_through_rays"));
-    assert!(s.ran("spawn_reflection_rays"));
+    assert!(!s.ran(Stage::DecodeTextures) && !s.ran(Stage::SpawnPassThroughRays));
+    assert!(s.ran(Stage::SpawnReflectionRays));
 
     let (p, s) = plan("cornell_box_transparency");
     assert!(p.pass_through && p.transparent_shadows && !p.reflections);
-    assert!(s.ran("spawn_pass_through_rays") && !s.ran("spawn_reflection_rays"));
+    assert!(s.ran(Stage::SpawnPassThroughRays) && !s.ran(Stage::SpawnReflectionRays));
 
     let (p, s) = plan("cube_textured");
-    assert!(p.textures && s.ran("decode_textures"));
-    assert!(!p.reflections && !s.ran("spawn_reflection_rays"));
+    assert!(p.textures && s.ran(Stage::DecodeTextures));
+    assert!(!p.reflections && !s.ran(Stage::SpawnReflectionRays));
 
     let (p, _) = plan("cornell_box_parallelogram_light");
     assert!(p.area_lights && p.pixel_patterns);
 
     let (p, s) = plan("spheres");
-    assert!(!p.triangle_bvh && !s.ran("build_triangle_bvh"));
+    assert!(!p.triangle_bvh && !s.ran(Stage::BuildTriangleBvh));
 }

@@ -6,7 +6,8 @@ mod common;
 use common::*;
 use glam::Vec3;
 use glint::accel::Aabb;
-use glint::accel::scene::SceneGeometry;
+use glint::stats::Stage;
+use glint::trace::geometry::SceneGeometry;
 
 const SQRT_HALF: f32 = std::f32::consts::FRAC_1_SQRT_2;
 
@@ -32,7 +33,7 @@ fn an_occluder_between_point_and_light_makes_the_pixel_exactly_black() {
     let blocker = ", Mesh((material: Some(\"m\"), geometry: Parallelogram(origin: (0.4, -0.1, 0.5), edge_u: (0.2, 0, 0), edge_v: (0, 0.2, 0))))";
     let r = render(&lit_quad_scene("lambertian", blocker));
     assert_eq!(r.film().pixel(1, 1), Vec3::ZERO);
-    assert!(r.stats().items("trace_shadow_rays") > 0);
+    assert!(r.stats().items(Stage::TraceShadowRays) > 0);
 }
 
 #[test]
@@ -72,15 +73,15 @@ fn the_bvh_built_by_the_schedule_validates_and_covers_every_triangle() {
     let mut covered = g.tri_bvh.prim_indices.clone();
     covered.sort_unstable();
     assert_eq!(covered, (0..34).collect::<Vec<u32>>());
-    assert!(r.stats().ran("build_triangle_bvh"));
+    assert!(r.stats().ran(Stage::BuildTriangleBvh));
 }
 
 #[test]
 fn a_spheres_only_scene_builds_no_triangle_bvh() {
     let mut r = load(&std::fs::read_to_string("scenes/spheres.ron").unwrap());
     r.render(None, &mut |_| {}).unwrap();
-    assert!(!r.stats().ran("build_triangle_bvh"));
-    assert!(r.stats().ran("build_sphere_bvh"));
+    assert!(!r.stats().ran(Stage::BuildTriangleBvh));
+    assert!(r.stats().ran(Stage::BuildSphereBvh));
     assert!(!r.plan().triangle_bvh);
 }
 
@@ -89,7 +90,7 @@ fn shadows_off_or_no_lights_run_no_shadow_stage() {
     let off = render(
         &lit_quad_scene("lambertian", "").replace("settings: (", "settings: (shadows: false, "),
     );
-    assert!(!off.stats().ran("trace_shadow_rays"));
+    assert!(!off.stats().ran(Stage::TraceShadowRays));
     assert_eq!(off.stats().rays.shadow, 0);
     // Without shadows the same pixel is lit even with the occluder in place.
     assert!(off.film().pixel(1, 1).x > 0.0);
@@ -99,7 +100,7 @@ fn shadows_off_or_no_lights_run_no_shadow_stage() {
         camera(2.0, 3),
         quad(0.0, "m")
     ));
-    assert!(!dark.stats().ran("trace_shadow_rays"));
+    assert!(!dark.stats().ran(Stage::TraceShadowRays));
     assert_eq!(dark.film().pixel(1, 1), Vec3::ZERO);
 }
 

@@ -103,7 +103,7 @@ fn interrupt_between_regions_finishes_the_region_in_flight() {
     assert!(summary.interrupted);
     assert_eq!(summary.samples, 1, "complete passes");
     let count = &r.film().count;
-    let first = glint::render::REGION_PIXELS as usize;
+    let first = glint::schedule::REGION_PIXELS as usize;
     assert!(count[..first].iter().all(|&c| c == 2));
     assert!(count[first..].iter().all(|&c| c == 1));
 }

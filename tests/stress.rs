@@ -106,25 +106,20 @@ fn film_counts_and_drops_nonfinite_samples() {
     use bevy_ecs::system::RunSystemOnce;
     use glam::Vec3;
     use glint::film::{Film, accumulate_film};
-    use glint::trace::stats::RenderStats;
-    use glint::trace::wavefront::{PassRegion, Wavefront};
+    use glint::stats::RenderStats;
+    use glint::trace::wavefront::SampleRadiance;
 
     let mut world = World::new();
     world.insert_resource(Film::new(4, 1));
     world.insert_resource(RenderStats::default());
-    world.insert_resource(PassRegion {
-        sample: 0,
+    world.insert_resource(SampleRadiance {
         first_pixel: 0,
-        pixels: 4,
-    });
-    world.insert_resource(Wavefront {
-        sample_radiance: vec![
+        values: vec![
             Vec3::ONE,
             Vec3::new(f32::NAN, 0.0, 0.0),
             Vec3::splat(f32::INFINITY),
             Vec3::new(0.5, f32::NEG_INFINITY, 0.0),
         ],
-        ..Default::default()
     });
     world.run_system_once(accumulate_film).unwrap();
     assert_eq!(world.resource::<RenderStats>().nonfinite_samples, 3);

@@ -1,4 +1,8 @@
-//! Acceleration structures and ray/primitive intersection.
+//! Acceleration structures and ray/primitive intersection: pure geometry.
+//!
+//! Everything here takes slices of primitives (boxes, vertex positions, sphere centres)
+//! and knows nothing of materials, settings, statistics or the `World`; the scene's
+//! tables and the systems that build them are in [`crate::trace::geometry`].
 //!
 //! - [`aabb`]: axis-aligned boxes and the robust slab test (Ize 2013).
 //! - [`triangle`]: watertight ray/triangle intersection (Woop, Benthin, Wald 2013).
@@ -11,7 +15,6 @@ use glam::Vec3;
 pub mod aabb;
 pub mod build;
 pub mod bvh;
-pub mod scene;
 pub mod sphere;
 pub mod traverse;
 pub mod triangle;

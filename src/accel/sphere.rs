@@ -9,6 +9,8 @@
 //! catastrophically), and the two roots are `c/q` and `q/a` with
 //! `q = b' + sign(b')·sqrt(Δ)`, so no root is a difference of near-equal values.
 
+use glam::{Vec2, Vec3};
+
 use super::Ray;
 
 /// Nearest t in (0, t_max) where the ray meets the sphere (the far root when the origin is inside).
@@ -47,6 +49,13 @@ pub fn sphere_roots(ray: &Ray, center: glam::Vec3, radius: f32) -> Option<(f32, 
     let r0 = c / q;
     let r1 = q / a;
     Some(if r0 <= r1 { (r0, r1) } else { (r1, r0) })
+}
+
+/// Texture coordinate on a sphere for the unit normal `n`: u around +y, v from the bottom pole.
+pub fn sphere_uv(n: Vec3) -> Vec2 {
+    let u = 0.5 + (-n.z).atan2(n.x) / std::f32::consts::TAU;
+    let v = 1.0 - n.y.clamp(-1.0, 1.0).acos() / std::f32::consts::PI;
+    Vec2::new(u, v)
 }
 
 #[cfg(test)]

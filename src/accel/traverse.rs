@@ -14,9 +14,6 @@ pub trait TraversalVisitor {
     fn visit_node(&mut self, _node: u32, _depth: u32) {}
     /// Called before every primitive test.
     fn test_prim(&mut self, _prim: u32) {}
-    /// Called by multi-hierarchy queries (`SceneGeometry`) before traversing the
-    /// hierarchy over primitives of `kind`, so node and primitive ids can be told apart.
-    fn begin_hierarchy(&mut self, _kind: crate::accel::scene::PrimKind) {}
 }
 
 impl TraversalVisitor for () {}

@@ -9,7 +9,6 @@
 //! is only a complete stratification after whole grids, so stratified configurations
 //! are measured (and can stop) only every `k*k` passes; uniform ones every pass.
 
-pub mod metrics;
 pub mod plot;
 pub mod reference;
 
@@ -20,12 +19,12 @@ use std::sync::atomic::{AtomicBool, Ordering};
 use std::time::{Duration, Instant};
 
 use crate::error::{GlintError, Result};
+use crate::film::metrics::{ImageError, image_error, log_log_slope};
 use crate::film::write_atomically;
 use crate::render::{Overrides, Renderer};
 use crate::sampling::samples_taken;
 use crate::scene::format::SceneFile;
 use crate::scene::{PixelSampling, parse_scene};
-use metrics::{ImageError, image_error, log_log_slope};
 use reference::{Reference, ReferenceOrigin, cached_reference, read_reference};
 
 /// Where the reference image comes from.

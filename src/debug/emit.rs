@@ -11,9 +11,9 @@ use super::DebugRequest;
 use super::log::{DebugTrace, RayKind, RayRecord};
 use super::primitives::{DebugPrimitive, Feature, Shape, Values};
 use crate::accel::Bvh;
-use crate::accel::scene::{PrimKind, SceneGeometry};
 use crate::film::Film;
 use crate::scene::{PixelSampling, Settings};
+use crate::trace::geometry::{PrimKind, SceneGeometry};
 use crate::trace::lights::Lights;
 use crate::trace::materials::Materials;
 

@@ -7,8 +7,8 @@
 use bevy_ecs::prelude::*;
 use glam::{Vec2, Vec3};
 
-use crate::accel::scene::{Hit, PrimKind};
 use crate::accel::{Ray, TraversalVisitor};
+use crate::trace::geometry::{GeometryVisitor, Hit, PrimKind};
 use crate::trace::lights::LightSample;
 use crate::trace::surface::Surface;
 use crate::trace::wavefront::QueuedRay;
@@ -93,6 +93,9 @@ impl TraversalVisitor for TraversalLog {
             depth: 0,
         });
     }
+}
+
+impl GeometryVisitor for TraversalLog {
     fn begin_hierarchy(&mut self, kind: PrimKind) {
         self.current = kind;
     }

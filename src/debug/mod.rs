@@ -30,19 +30,18 @@ use glam::Vec3;
 use rayon::prelude::*;
 
 use crate::accel::Aabb;
-use crate::accel::scene::SceneGeometry;
 use crate::error::{GlintError, Result};
 use crate::film::{Encoding, write_image};
 use crate::render::{Overrides, Renderer};
 use crate::scene::format::SceneFile;
 use crate::scene::{Acceleration, Settings, read_scene};
-use crate::schedule::RenderPass;
-use crate::trace::StageErrors;
+use crate::schedule::run_passes;
+use crate::trace::geometry::SceneGeometry;
 use crate::trace::lights::Lights;
 use crate::trace::materials::Materials;
 use crate::trace::plan::RenderPlan;
 use crate::trace::surface::surface_at;
-use crate::trace::wavefront::{PassRegion, camera_ray};
+use crate::trace::wavefront::camera_ray;
 
 pub use log::DebugTrace;
 pub use overlay::Canvas;
@@ -168,23 +167,9 @@ impl DebugSession {
         renderer.world.insert_resource(request);
         renderer.world.add_schedule(debug_emit_schedule());
         renderer.prepare()?;
-        for sample in 0..renderer.samples_per_pixel() {
-            renderer.world.insert_resource(PassRegion {
-                sample,
-                first_pixel: y * camera.width + x,
-                pixels: 1,
-            });
-            renderer.world.run_schedule(RenderPass);
-        }
-        if let Some(e) = renderer
-            .world
-            .resource_mut::<StageErrors>()
-            .0
-            .drain(..)
-            .next()
-        {
-            return Err(e);
-        }
+        let pixel = y * camera.width + x;
+        let samples = 0..renderer.samples_per_pixel();
+        run_passes(&mut renderer.world, samples, pixel..pixel + 1, &mut ())?;
         renderer.world.run_schedule(DebugEmit);
         Ok(Self {
             renderer,

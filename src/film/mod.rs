@@ -1,4 +1,6 @@
-//! The film: accumulated radiance per pixel, and image output.
+//! The film: accumulated radiance per pixel, image output, and error metrics.
+
+pub mod metrics;
 
 use std::io::Write;
 use std::path::{Path, PathBuf};
@@ -8,8 +10,8 @@ use glam::{DVec3, Vec3};
 use rayon::prelude::*;
 
 use crate::error::{GlintError, Result};
-use crate::trace::stats::RenderStats;
-use crate::trace::wavefront::{PassRegion, Wavefront};
+use crate::stats::{RenderStats, Stage};
+use crate::trace::wavefront::SampleRadiance;
 
 /// Accumulated radiance: a sum and a sample count per pixel, row 0 at the top.
 #[derive(Resource, Clone, Debug, Default, PartialEq)]
@@ -56,18 +58,17 @@ impl Film {
 
 /// Adds the region's finite samples to the film; counts and drops the others.
 pub fn accumulate_film(
-    region: Res<PassRegion>,
-    wf: Res<Wavefront>,
+    radiance: Res<SampleRadiance>,
     mut film: ResMut<Film>,
     mut stats: ResMut<RenderStats>,
 ) {
-    let start = region.first_pixel as usize;
-    let end = start + wf.sample_radiance.len();
+    let start = radiance.first_pixel as usize;
+    let end = start + radiance.values.len();
     let film = &mut *film;
     let dropped: u64 = film.sum[start..end]
         .par_iter_mut()
         .zip(&mut film.count[start..end])
-        .zip(&wf.sample_radiance)
+        .zip(&radiance.values)
         .map(|((sum, count), c)| {
             if c.is_finite() {
                 *sum += c.as_dvec3();
@@ -79,7 +80,7 @@ pub fn accumulate_film(
         })
         .sum();
     stats.nonfinite_samples += dropped;
-    stats.record("accumulate_film", wf.sample_radiance.len() as u64);
+    stats.record(Stage::AccumulateFilm, radiance.values.len() as u64);
 }
 
 /// How 8-bit outputs encode linear values.

@@ -5,12 +5,12 @@ use glam::{Affine3A, DVec3, Quat, Vec2, Vec3};
 use rayon::prelude::*;
 
 use super::{Budget, Row, render, v3};
-use crate::accel::scene::{Hit, SceneGeometry};
 use crate::accel::{Aabb, Bvh, Ray, SplitMethod};
 use crate::render::Renderer;
 use crate::scene::components::MeshData;
 use crate::scene::{Sphere, parse_scene, shapes};
 pub use crate::test_util::Lcg;
+use crate::trace::geometry::{Hit, SceneGeometry};
 use crate::trace::surface::surface_at;
 
 /// World-space triangles of `mesh` under `m`.

@@ -8,7 +8,7 @@
 //! [`Budget::full`] (millions of rays). See `docs/stress.md` for the table and for how
 //! each failure mode is prevented.
 //!
-//! [`SceneGeometry`]: crate::accel::scene::SceneGeometry
+//! [`SceneGeometry`]: crate::trace::geometry::SceneGeometry
 
 use std::fmt::Write as _;
 use std::path::Path;
@@ -19,7 +19,7 @@ use crate::error::{GlintError, Result};
 use crate::film::Film;
 use crate::render::Renderer;
 use crate::scene::parse_scene;
-use crate::trace::stats::RenderStats;
+use crate::stats::RenderStats;
 
 mod geometry;
 pub mod reference;

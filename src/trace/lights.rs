@@ -3,9 +3,9 @@
 use bevy_ecs::prelude::*;
 use glam::Vec3;
 
-use super::stats::RenderStats;
 use crate::sampling::{Sampler, light_dim, sample_parallelogram_light, sample_segment_light};
 use crate::scene::{ParallelogramLight, PointLight, SegmentLight};
+use crate::stats::{RenderStats, Stage};
 
 /// Every light, by kind, in a fixed order (points, segments, parallelograms).
 #[derive(Resource, Clone, Debug, Default)]
@@ -102,5 +102,5 @@ pub fn gather_lights(
         segments: segments.iter().copied().collect(),
         parallelograms: parallelograms.iter().copied().collect(),
     };
-    stats.record("gather_lights", lights.len() as u64);
+    stats.record(Stage::GatherLights, lights.len() as u64);
 }

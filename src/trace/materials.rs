@@ -6,11 +6,10 @@ use std::sync::Arc;
 use bevy_ecs::prelude::*;
 use glam::{Vec2, Vec3};
 
-use super::StageErrors;
-use super::stats::RenderStats;
 use crate::error::GlintError;
 use crate::scene::{Material, Settings, TextureSource};
 use crate::shade::texture::{Texture, WrapMode};
+use crate::stats::{RenderStats, Stage, StageErrors};
 
 /// A material as the tracer reads it.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -85,7 +84,7 @@ pub fn gather_materials(
             wrap: m.wrap,
         });
     }
-    stats.record("gather_materials", table.list.len() as u64);
+    stats.record(Stage::GatherMaterials, table.list.len() as u64);
     *materials = table;
 }
 
@@ -118,5 +117,5 @@ pub fn decode_textures(
         texels += textures.last().map_or(0, |t| t.texels.len() as u64);
     }
     materials.textures = textures;
-    stats.record("decode_textures", texels);
+    stats.record(Stage::DecodeTextures, texels);
 }

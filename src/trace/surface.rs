@@ -9,18 +9,13 @@
 
 use glam::{Vec2, Vec3};
 
-use crate::accel::Ray;
-use crate::accel::scene::{Hit, PrimKind, SceneGeometry, sphere_uv};
+use crate::accel::sphere::sphere_uv;
+use crate::accel::{Ray, gamma};
+use crate::trace::geometry::{Hit, PrimKind, SceneGeometry};
 
 /// Fraction of a shadow ray's length left out at the light end, so that a surface the
 /// light sample sits on does not shadow it.
 pub const SHADOW_EPSILON: f32 = 1e-4;
-
-/// `n * eps / (1 - n * eps)`, pbrt's bound on the relative error of `n` float operations.
-pub const fn gamma(n: i32) -> f32 {
-    let e = f32::EPSILON * 0.5 * n as f32;
-    e / (1.0 - e)
-}
 
 /// A shading point.
 #[derive(Clone, Copy, Debug, PartialEq)]

@@ -13,14 +13,14 @@ use rayon::prelude::*;
 use super::lights::{LightSample, Lights};
 use super::materials::Materials;
 use super::plan::RenderPlan;
-use super::stats::RenderStats;
 use super::surface::{SHADOW_EPSILON, Surface, surface_at};
 use crate::accel::Ray;
-use crate::accel::scene::SceneGeometry;
 use crate::debug::log::{DebugTrace, TraversalLog};
 use crate::sampling::{Sampler, pixel_sample_offset, samples_taken};
 use crate::scene::{Camera, Settings};
 use crate::shade::{Shading, ShadingInput};
+use crate::stats::{RenderStats, Stage};
+use crate::trace::geometry::SceneGeometry;
 
 /// Rays per rayon task: large enough to amortise scheduling, small enough to balance.
 const CHUNK: usize = 1024;
@@ -75,8 +75,15 @@ pub struct Wavefront {
     pub shadow_rays: Vec<ShadowRay>,
     /// Rays for the next depth.
     pub next: Vec<QueuedRay>,
-    /// Radiance of each camera sample of the region.
-    pub sample_radiance: Vec<Vec3>,
+}
+
+/// What a region's tracing hands the film: the radiance of each camera sample.
+#[derive(Resource, Clone, Debug, Default, PartialEq)]
+pub struct SampleRadiance {
+    /// Pixel (row-major index) of the first sample; the others follow in order.
+    pub first_pixel: u32,
+    /// Radiance of each camera sample of the region, one per pixel.
+    pub values: Vec<Vec3>,
 }
 
 /// The camera's ray through image-plane position `(x, y)` in pixels (row 0 at the top).
@@ -132,6 +139,7 @@ pub fn generate_camera_samples(
     cameras: Query<&Camera>,
     region: Res<PassRegion>,
     mut wf: ResMut<Wavefront>,
+    mut radiance: ResMut<SampleRadiance>,
     mut stats: ResMut<RenderStats>,
     debug: Option<ResMut<DebugTrace>>,
 ) {
@@ -168,10 +176,11 @@ pub fn generate_camera_samples(
     if let Some(mut log) = debug {
         log.record_camera_samples(region.sample, &rays, offset_of);
     }
-    stats.record("generate_camera_samples", rays.len() as u64);
+    stats.record(Stage::GenerateCameraSamples, rays.len() as u64);
     stats.rays.camera += rays.len() as u64;
     wf.depth = 0;
-    wf.sample_radiance = vec![Vec3::ZERO; rays.len()];
+    radiance.first_pixel = region.first_pixel;
+    radiance.values = vec![Vec3::ZERO; rays.len()];
     wf.rays = rays;
 }
 
@@ -214,7 +223,7 @@ pub fn intersect_rays(
         }
     };
     wf.hits = hits;
-    stats.record("intersect_rays", wf.rays.len() as u64);
+    stats.record(Stage::IntersectRays, wf.rays.len() as u64);
 }
 
 /// Weight of a hit's own colour in the pass-through blend: alpha where SPEC blends, else 1.
@@ -379,7 +388,7 @@ pub fn shade_hits(
         }
     };
     stats.record(
-        "shade_hits",
+        Stage::ShadeHits,
         wf.hits.iter().filter(|h| h.is_some()).count() as u64,
     );
     wf.ray_radiance = radiance;
@@ -419,18 +428,21 @@ pub fn trace_shadow_rays(
     for (s, c) in wf.shadow_rays.iter().zip(visible) {
         wf.ray_radiance[s.owner as usize] += c;
     }
-    stats.record("trace_shadow_rays", wf.shadow_rays.len() as u64);
+    stats.record(Stage::TraceShadowRays, wf.shadow_rays.len() as u64);
     stats.rays.shadow += wf.shadow_rays.len() as u64;
 }
 
 /// Adds each ray's radiance into its camera sample, in queue order (deterministic).
-pub fn gather_radiance(mut wf: ResMut<Wavefront>, debug: Option<ResMut<DebugTrace>>) {
+pub fn gather_radiance(
+    wf: Res<Wavefront>,
+    mut radiance: ResMut<SampleRadiance>,
+    debug: Option<ResMut<DebugTrace>>,
+) {
     if let Some(mut log) = debug {
         log.record_radiance(&wf.ray_radiance);
     }
-    let wf = &mut *wf;
     for (q, c) in wf.rays.iter().zip(&wf.ray_radiance) {
-        wf.sample_radiance[q.slot as usize] += *c;
+        radiance.values[q.slot as usize] += *c;
     }
 }
 
@@ -472,7 +484,7 @@ pub fn spawn_reflection_rays(
         let weight = q.weight * blend_alpha(&settings, m.alpha, depth) * m.ks;
         (weight != Vec3::ZERO).then(|| (surface.reflection_ray(q.ray.dir), weight))
     });
-    stats.record("spawn_reflection_rays", spawned.len() as u64);
+    stats.record(Stage::SpawnReflectionRays, spawned.len() as u64);
     stats.rays.reflection += spawned.len() as u64;
     wf.next.extend(spawned);
 }
@@ -493,7 +505,7 @@ pub fn spawn_pass_through_rays(
         (alpha != 1.0 && weight != Vec3::ZERO)
             .then(|| (surface.pass_through_ray(q.ray.dir), weight))
     });
-    stats.record("spawn_pass_through_rays", spawned.len() as u64);
+    stats.record(Stage::SpawnPassThroughRays, spawned.len() as u64);
     stats.rays.pass_through += spawned.len() as u64;
     wf.next.extend(spawned);
 }

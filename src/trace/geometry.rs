@@ -4,14 +4,15 @@
 use bevy_ecs::prelude::*;
 use glam::{Vec2, Vec3};
 
-use super::{
-    Aabb, Bvh, Ray, SplitMethod, TraversalVisitor, intersect_sphere, intersect_triangle,
-    sphere::sphere_roots,
-    triangle::{RayShear, intersect_triangle_sheared},
+use super::materials::Materials;
+use crate::accel::sphere::{sphere_roots, sphere_uv};
+use crate::accel::triangle::{RayShear, intersect_triangle_sheared};
+use crate::accel::{
+    Aabb, Bvh, Ray, SplitMethod, TraversalStats, TraversalVisitor, intersect_sphere,
+    intersect_triangle,
 };
 use crate::scene::{Acceleration, BvhSplit, Mesh, Settings, Sphere, Transform};
-use crate::trace::materials::Materials;
-use crate::trace::stats::RenderStats;
+use crate::stats::{RenderStats, Stage};
 
 /// Which kind of primitive a hit is on.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -21,6 +22,17 @@ pub enum PrimKind {
     /// An analytic sphere.
     Sphere,
 }
+
+/// Observes a query over the scene's hierarchies: the BVH visitor, told which
+/// hierarchy it is in so node and primitive ids can be told apart.
+pub trait GeometryVisitor: TraversalVisitor {
+    /// Called before traversing the hierarchy over primitives of `kind`.
+    fn begin_hierarchy(&mut self, _kind: PrimKind) {}
+}
+
+impl GeometryVisitor for () {}
+
+impl GeometryVisitor for TraversalStats {}
 
 /// The closest intersection of a ray.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -103,7 +115,7 @@ pub fn build_triangle_bvh(
         .map(|p| Aabb::from_points(p))
         .collect();
     g.tri_bvh = build(&bounds, &settings);
-    stats.record("build_triangle_bvh", bounds.len() as u64);
+    stats.record(Stage::BuildTriangleBvh, bounds.len() as u64);
 }
 
 /// Gathers the spheres and builds their BVH.
@@ -129,7 +141,7 @@ pub fn build_sphere_bvh(
         })
         .collect();
     g.sphere_bvh = build(&bounds, &settings);
-    stats.record("build_sphere_bvh", bounds.len() as u64);
+    stats.record(Stage::BuildSphereBvh, bounds.len() as u64);
 }
 
 impl SceneGeometry {
@@ -138,7 +150,7 @@ impl SceneGeometry {
         &self,
         ray: &Ray,
         t_max: f32,
-        visitor: &mut impl TraversalVisitor,
+        visitor: &mut impl GeometryVisitor,
     ) -> Option<Hit> {
         let mut best: Option<Hit> = None;
         let mut t_max = t_max;
@@ -182,7 +194,7 @@ impl SceneGeometry {
     }
 
     /// Whether anything lies on the ray in (0, t_max).
-    pub fn occluded(&self, ray: &Ray, t_max: f32, visitor: &mut impl TraversalVisitor) -> bool {
+    pub fn occluded(&self, ray: &Ray, t_max: f32, visitor: &mut impl GeometryVisitor) -> bool {
         let tris = !self.tri_bvh.nodes.is_empty()
             && self.tri_bvh.any_hit(ray, t_max, visitor, |p| {
                 let [a, b, c] = self.tri_positions[p as usize];
@@ -204,7 +216,7 @@ impl SceneGeometry {
         ray: &Ray,
         t_max: f32,
         materials: &Materials,
-        visitor: &mut impl TraversalVisitor,
+        visitor: &mut impl GeometryVisitor,
     ) -> Vec3 {
         // (t, material, uv) of every transparent surface crossed; opaque ones stop the walk.
         let mut crossings = Crossings::default();
@@ -318,11 +330,4 @@ impl Crossings {
         all.sort_unstable_by(|a, b| a.0.total_cmp(&b.0));
         all
     }
-}
-
-/// Texture coordinate on a sphere for the unit normal `n`: u around +y, v from the bottom pole.
-pub fn sphere_uv(n: Vec3) -> Vec2 {
-    let u = 0.5 + (-n.z).atan2(n.x) / std::f32::consts::TAU;
-    let v = 1.0 - n.y.clamp(-1.0, 1.0).acos() / std::f32::consts::PI;
-    Vec2::new(u, v)
 }
