@@ -150,8 +150,7 @@ pub fn write_image(
         image::RgbImage::from_raw(width, height, to_rgb8(pixels, encoding))
             .map(|img| img.write_to(&mut bytes, format))
     } else {
-        let raw = pixels.iter().flat_map(|p| p.to_array()).collect();
-        image::Rgb32FImage::from_raw(width, height, raw).map(|img| img.write_to(&mut bytes, format))
+        return write_atomically(path, &encode_exr(path, width, height, pixels)?);
     };
     match encoded {
         Some(Ok(())) => {}
@@ -171,7 +170,48 @@ pub fn write_image(
     write_atomically(path, bytes.get_ref())
 }
 
-/// Writes `bytes` to `path` via a temporary sibling file and a rename.
+/// 32-bit float RGB EXR bytes of `pixels`. Written by the `exr` crate itself, one
+/// block after another in increasing order, because its parallel writer (which the
+/// `image` crate uses) stores blocks in completion order: the same image would give
+/// different bytes from run to run.
+fn encode_exr(path: &Path, width: u32, height: u32, pixels: &[Vec3]) -> Result<Vec<u8>> {
+    use exr::prelude::*;
+    let (w, h) = (width as usize, height as usize);
+    if pixels.len() != w * h {
+        return Err(GlintError::Image {
+            path: path.to_owned(),
+            source: image::ImageError::Parameter(image::error::ParameterError::from_kind(
+                image::error::ParameterErrorKind::DimensionMismatch,
+            )),
+        });
+    }
+    let encoding = exr::image::Encoding {
+        compression: Compression::RLE,
+        blocks: Blocks::Tiles(Vec2(64, 64)),
+        line_order: LineOrder::Increasing,
+    };
+    let channels = SpecificChannels::rgb(|p: Vec2<usize>| {
+        let c = pixels[p.y() * w + p.x()];
+        (c.x, c.y, c.z)
+    });
+    let mut bytes = std::io::Cursor::new(Vec::new());
+    Image::from_encoded_channels((w, h), encoding, channels)
+        .write()
+        .non_parallel()
+        .to_buffered(&mut bytes)
+        .map_err(|e| GlintError::Image {
+            path: path.to_owned(),
+            source: image::ImageError::Encoding(image::error::EncodingError::new(
+                image::ImageFormat::OpenExr.into(),
+                e,
+            )),
+        })?;
+    Ok(bytes.into_inner())
+}
+
+/// Writes `bytes` to `path` via a temporary sibling file and a rename. The temporary
+/// file has a random name and is created exclusively, so a planted symlink cannot
+/// redirect the write; an existing output keeps its permissions.
 pub fn write_atomically(path: &Path, bytes: &[u8]) -> Result<()> {
     let io = |source| GlintError::Io {
         path: path.to_owned(),
@@ -181,20 +221,21 @@ pub fn write_atomically(path: &Path, bytes: &[u8]) -> Result<()> {
         Some(d) if !d.as_os_str().is_empty() => d.to_owned(),
         _ => PathBuf::from("."),
     };
-    let name = path
-        .file_name()
-        .map_or_else(|| "output".into(), |n| n.to_string_lossy().into_owned());
-    let tmp = dir.join(format!(".{name}.{}.tmp", std::process::id()));
-    let result = std::fs::File::create(&tmp)
-        .and_then(|mut f| {
-            f.write_all(bytes)?;
-            f.sync_all()
-        })
-        .and_then(|()| std::fs::rename(&tmp, path));
-    if result.is_err() {
-        let _ = std::fs::remove_file(&tmp);
+    let mut tmp = tempfile::Builder::new()
+        .prefix(".glint-")
+        .suffix(".tmp")
+        .tempfile_in(&dir)
+        .map_err(io)?;
+    tmp.write_all(bytes).map_err(io)?;
+    if let Ok(meta) = std::fs::metadata(path) {
+        tmp.as_file()
+            .set_permissions(meta.permissions())
+            .map_err(io)?;
     }
-    result.map_err(io)
+    tmp.as_file().sync_all().map_err(io)?;
+    // On failure the temporary file is removed when `persist`'s error is dropped.
+    tmp.persist(path).map_err(|e| io(e.error))?;
+    Ok(())
 }
 
 #[cfg(test)]
@@ -221,5 +262,70 @@ mod tests {
         assert!(write_image(&path, 1, 1, &[Vec3::ONE], Encoding::Linear).is_err());
         assert!(!path.exists());
         std::fs::remove_dir_all(&dir).unwrap();
+    }
+
+    #[test]
+    fn atomic_write_does_not_follow_a_symlink_at_the_old_temporary_name() {
+        let dir = tempfile::tempdir().unwrap();
+        let victim = dir.path().join("victim.txt");
+        std::fs::write(&victim, b"keep me").unwrap();
+        let out = dir.path().join("out.png");
+        // The name the temporary file had before it was random.
+        let planted = dir
+            .path()
+            .join(format!(".out.png.{}.tmp", std::process::id()));
+        std::os::unix::fs::symlink(&victim, &planted).unwrap();
+        write_atomically(&out, b"image").unwrap();
+        assert_eq!(std::fs::read(&victim).unwrap(), b"keep me");
+        assert_eq!(std::fs::read(&out).unwrap(), b"image");
+        let left: Vec<_> = std::fs::read_dir(dir.path())
+            .unwrap()
+            .map(|e| e.unwrap().file_name().into_string().unwrap())
+            .filter(|n| n.starts_with(".glint-"))
+            .collect();
+        assert!(left.is_empty(), "temporary files left behind: {left:?}");
+    }
+
+    #[test]
+    fn atomic_write_keeps_the_outputs_permissions() {
+        use std::os::unix::fs::PermissionsExt;
+        let dir = tempfile::tempdir().unwrap();
+        let out = dir.path().join("out.png");
+        std::fs::write(&out, b"old").unwrap();
+        std::fs::set_permissions(&out, std::fs::Permissions::from_mode(0o640)).unwrap();
+        write_atomically(&out, b"new").unwrap();
+        let mode = std::fs::metadata(&out).unwrap().permissions().mode() & 0o777;
+        assert_eq!(mode, 0o640);
+        assert_eq!(std::fs::read(&out).unwrap(), b"new");
+    }
+
+    #[test]
+    fn exr_output_is_byte_reproducible() {
+        let dir = tempfile::tempdir().unwrap();
+        let (w, h) = (67, 45);
+        let pixels: Vec<Vec3> = (0..w * h)
+            .map(|i| Vec3::new(i as f32 / 100.0, (i % 7) as f32, 1.0 / (1 + i) as f32))
+            .collect();
+        let bytes = |name: &str| {
+            let p = dir.path().join(name);
+            write_image(&p, w, h, &pixels, Encoding::Linear).unwrap();
+            std::fs::read(p).unwrap()
+        };
+        let first = bytes("a.exr");
+        for name in ["b.exr", "c.exr", "d.exr"] {
+            assert!(first == bytes(name), "{name} differs from a.exr");
+        }
+    }
+
+    #[test]
+    fn exr_output_reads_back_exactly() {
+        let dir = tempfile::tempdir().unwrap();
+        let p = dir.path().join("a.exr");
+        let pixels: Vec<Vec3> = (0..6).map(|i| Vec3::new(i as f32, 0.25, -1e-3)).collect();
+        write_image(&p, 3, 2, &pixels, Encoding::Linear).unwrap();
+        let back = image::open(&p).unwrap().into_rgb32f();
+        assert_eq!((back.width(), back.height()), (3, 2));
+        let read: Vec<Vec3> = back.pixels().map(|q| Vec3::from(q.0)).collect();
+        assert_eq!(read, pixels);
     }
 }
