@@ -61,7 +61,7 @@ pub struct Material {
     /// Specular exponent.
     pub shininess: f32,
     /// Alpha: 1 = opaque, 0 = fully transparent.
-    pub transparency: f32,
+    pub alpha: f32,
     /// Optional diffuse texture replacing `kd` when texture mapping is on.
     pub kd_texture: Option<TextureSource>,
     /// Texture wrap modes along u and v.
@@ -75,7 +75,7 @@ impl Default for Material {
             kd: Vec3::splat(0.8),
             ks: Vec3::ZERO,
             shininess: 1.0,
-            transparency: 1.0,
+            alpha: 1.0,
             kd_texture: None,
             wrap: [WrapMode::Clamp; 2],
         }

@@ -15,8 +15,8 @@ use gltf::texture::WrappingMode;
 use super::components::*;
 use super::model::{ImportOptions, ImportReport, ImportedCamera, mesh_bounds};
 use super::shapes;
-use crate::error::{GlintError, Result};
 use crate::shade::texture::{Texture, WrapMode};
+use crate::error::{GlintError, Result};
 
 /// Required extensions glint understands; any other in `extensionsRequired` is refused.
 pub const SUPPORTED_REQUIRED_EXTENSIONS: [&str; 3] = [
@@ -457,7 +457,7 @@ impl<'a> Importer<'a> {
         let base = Vec3::new(r, g, b).max(Vec3::ZERO);
         let (kd_scale, ks, shininess) =
             metallic_roughness_to_phong(base, pbr.metallic_factor(), pbr.roughness_factor());
-        let transparency = match m.alpha_mode() {
+        let alpha = match m.alpha_mode() {
             gltf::material::AlphaMode::Opaque => 1.0,
             gltf::material::AlphaMode::Blend => a.clamp(0.0, 1.0),
             gltf::material::AlphaMode::Mask => {
@@ -489,7 +489,7 @@ impl<'a> Importer<'a> {
                     kd,
                     ks,
                     shininess,
-                    transparency,
+                    alpha,
                     kd_texture,
                     wrap,
                 },

@@ -192,7 +192,7 @@ fn validate_material(name: &str, d: &MaterialDesc, path: &Path) -> Result<Materi
         kd: c.colour("kd", d.kd)?,
         ks: c.colour("ks", d.ks)?,
         shininess: c.scalar("shininess", d.shininess, 0.0, f32::MAX)?,
-        transparency: c.scalar("transparency", d.transparency, 0.0, 1.0)?,
+        alpha: c.scalar("transparency", d.alpha, 0.0, 1.0)?,
         kd_texture,
         wrap: [d.wrap.0, d.wrap.1],
     })

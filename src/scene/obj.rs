@@ -11,8 +11,8 @@ use glam::{Vec2, Vec3};
 use super::components::*;
 use super::model::{ImportOptions, ImportReport, mesh_bounds};
 use super::shapes;
-use crate::error::{GlintError, Result};
 use crate::shade::texture::WrapMode;
+use crate::error::{GlintError, Result};
 
 fn asset_err(path: &Path, message: impl Into<String>) -> GlintError {
     GlintError::Asset {
@@ -213,7 +213,7 @@ fn material(mtl: &tobj::Material, dir: &Path, path: &Path, warnings: &mut Vec<St
             .shininess
             .filter(|s| s.is_finite() && *s >= 0.0)
             .unwrap_or(1.0),
-        transparency: alpha.clamp(0.0, 1.0),
+        alpha: alpha.clamp(0.0, 1.0),
         kd_texture,
         wrap: [WrapMode::Repeat; 2],
     }
