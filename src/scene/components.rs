@@ -6,7 +6,7 @@ use std::sync::Arc;
 use bevy_ecs::prelude::*;
 use glam::{Affine3A, Vec2, Vec3};
 
-use crate::shade::texture::{Texture, WrapMode};
+use super::texture::{Texture, WrapMode};
 
 /// Object-to-world placement of a mesh (named destination-from-source).
 #[derive(Component, Clone, Copy, Debug, PartialEq)]

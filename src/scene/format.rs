@@ -7,7 +7,7 @@ use glam::{Vec2, Vec3};
 use serde::Deserialize;
 
 use super::settings::Settings;
-use crate::shade::texture::WrapMode;
+use super::texture::WrapMode;
 
 /// A whole scene file.
 #[derive(Clone, Debug, Deserialize)]

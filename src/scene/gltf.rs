@@ -15,7 +15,7 @@ use gltf::texture::WrappingMode;
 use super::components::*;
 use super::model::{ImportOptions, ImportReport, ImportedCamera, mesh_bounds};
 use super::shapes;
-use crate::shade::texture::{Texture, WrapMode};
+use super::texture::{Texture, WrapMode};
 use crate::error::{GlintError, Result};
 
 /// Required extensions glint understands; any other in `extensionsRequired` is refused.

@@ -3,11 +3,13 @@
 pub mod components;
 pub mod format;
 pub mod gltf;
+pub mod gradient;
 pub mod load;
 pub mod model;
 pub mod obj;
 pub mod settings;
 pub mod shapes;
+pub mod texture;
 
 pub use components::*;
 pub use load::{SceneSource, parse_scene, read_scene, spawn_scene};

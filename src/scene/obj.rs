@@ -11,7 +11,7 @@ use glam::{Vec2, Vec3};
 use super::components::*;
 use super::model::{ImportOptions, ImportReport, mesh_bounds};
 use super::shapes;
-use crate::shade::texture::WrapMode;
+use super::texture::WrapMode;
 use crate::error::{GlintError, Result};
 
 fn asset_err(path: &Path, message: impl Into<String>) -> GlintError {

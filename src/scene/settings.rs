@@ -4,7 +4,7 @@ use bevy_ecs::prelude::*;
 use glam::Vec3;
 use serde::{Deserialize, Serialize};
 
-use crate::shade::gradient::Gradient;
+use super::gradient::Gradient;
 
 /// How a hit is shaded (SPEC "Shading").
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
