@@ -13,10 +13,10 @@ use gltf::mesh::Mode;
 use gltf::texture::WrappingMode;
 
 use super::components::*;
-use super::model::{ImportOptions, ImportReport, ImportedCamera, mesh_bounds};
+use super::import::{ImportOptions, ImportReport, ImportedCamera, asset_err, mesh_bounds};
 use super::shapes;
 use super::texture::{Texture, WrapMode};
-use crate::error::{GlintError, Result};
+use crate::error::{AssetError, GlintError, Result};
 
 /// Required extensions glint understands; any other in `extensionsRequired` is refused.
 pub const SUPPORTED_REQUIRED_EXTENSIONS: [&str; 3] = [
@@ -29,13 +29,6 @@ pub const SUPPORTED_REQUIRED_EXTENSIONS: [&str; 3] = [
 pub const DIELECTRIC_F0: f32 = 0.04;
 /// Largest shininess the roughness mapping produces (roughness 0).
 pub const MAX_SHININESS: f32 = 10_000.0;
-
-fn asset_err(path: &Path, message: impl Into<String>) -> GlintError {
-    GlintError::Asset {
-        path: path.to_owned(),
-        message: message.into(),
-    }
-}
 
 /// Phong-style material parameters of a glTF metallic-roughness material.
 ///
@@ -158,32 +151,32 @@ pub fn import_gltf(
         source,
     })?;
     // Check the required extensions first: the crate's own refusal does not name them.
-    let unvalidated = gltf::Gltf::from_slice_without_validation(&bytes)
-        .map_err(|e| asset_err(path, format!("not a valid glTF file: {e}")))?;
+    let unvalidated =
+        gltf::Gltf::from_slice_without_validation(&bytes).map_err(|e| asset_err(path, e))?;
     for ext in unvalidated.extensions_required() {
         if !SUPPORTED_REQUIRED_EXTENSIONS.contains(&ext) {
             return Err(asset_err(
                 path,
-                format!("requires the glTF extension {ext}, which glint does not support"),
+                AssetError::UnsupportedExtension(ext.to_owned()),
             ));
         }
     }
     drop(unvalidated);
-    let gltf::Gltf { document, blob } = gltf::Gltf::from_slice(&bytes)
-        .map_err(|e| asset_err(path, format!("not a valid glTF file: {e}")))?;
+    let gltf::Gltf { document, blob } =
+        gltf::Gltf::from_slice(&bytes).map_err(|e| asset_err(path, e))?;
     drop(bytes);
     let base = path.parent().unwrap_or(Path::new("."));
     let buffers = gltf::import_buffers(&document, Some(base), blob)
-        .map_err(|e| asset_err(path, format!("cannot read a buffer: {e}")))?;
+        .map_err(|e| asset_err(path, AssetError::GltfBuffer(e)))?;
 
     let scene = match options.scene {
-        Some(i) => document.scenes().nth(i).ok_or_else(|| {
+        Some(index) => document.scenes().nth(index).ok_or_else(|| {
             asset_err(
                 path,
-                format!(
-                    "scene {i} does not exist (the file has {})",
-                    document.scenes().len()
-                ),
+                AssetError::NoSuchScene {
+                    index,
+                    count: document.scenes().len(),
+                },
             )
         })?,
         None => match document
@@ -191,7 +184,7 @@ pub fn import_gltf(
             .or_else(|| document.scenes().next())
         {
             Some(s) => s,
-            None => return Err(asset_err(path, "the file has no scene")),
+            None => return Err(asset_err(path, AssetError::NoScene)),
         },
     };
 
@@ -244,7 +237,10 @@ impl<'a> Importer<'a> {
         if !file_from_node.is_finite() {
             return Err(asset_err(
                 self.path,
-                format!("node {}: transform is not finite", node_label(node)),
+                AssetError::Invalid {
+                    item: format!("node {}", node_label(node)),
+                    problem: "transform is not finite".into(),
+                },
             ));
         }
         let world_from_node = self.options.world_from_file * Affine3A::from_mat4(file_from_node);
@@ -354,7 +350,15 @@ impl<'a> Importer<'a> {
         warnings: &mut Vec<String>,
     ) -> Result<MeshData> {
         let label = format!("mesh {} primitive {}", mesh_label(mesh), primitive.index());
-        let err = |m: &str| asset_err(self.path, format!("{label}: {m}"));
+        let err = |problem: &str| {
+            asset_err(
+                self.path,
+                AssetError::Invalid {
+                    item: label.clone(),
+                    problem: problem.to_owned(),
+                },
+            )
+        };
         let buffers = self.buffers;
         let reader = primitive.reader(|b| buffers.get(b.index()).map(|d| &d.0[..]));
         let positions: Vec<Vec3> = reader

@@ -10,7 +10,7 @@ use glam::{Affine3A, EulerRot, Quat, Vec3};
 use super::components::*;
 use super::format::*;
 use super::gltf::import_gltf;
-use super::model::ImportOptions;
+use super::import::ImportOptions;
 use super::obj::import_obj;
 use super::settings::Settings;
 use super::shapes;

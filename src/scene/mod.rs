@@ -4,13 +4,16 @@ pub mod components;
 pub mod format;
 pub mod gltf;
 pub mod gradient;
+pub mod import;
 pub mod load;
 pub mod model;
 pub mod obj;
+pub mod overrides;
 pub mod settings;
 pub mod shapes;
 pub mod texture;
 
 pub use components::*;
 pub use load::{SceneSource, parse_scene, read_scene, spawn_scene};
+pub use overrides::Overrides;
 pub use settings::*;
