@@ -1,4 +1,6 @@
-//! The scene: components, settings, the RON format and its loader.
+//! The scene: components, settings, the RON format and its loader, the glTF and OBJ
+//! importers, and per-run overrides. The bottom layer: it imports only `crate::error`,
+//! and within it `load` and `model` use the importers, never the reverse.
 
 pub mod components;
 pub mod format;

@@ -18,8 +18,8 @@ use super::overrides::Overrides;
 use super::settings::Settings;
 use crate::error::{AssetError, Result};
 
-// The importers' shared types, also reachable here, where models are imported.
-pub use super::import::{ImportOptions, ImportReport, ImportedCamera, mesh_bounds};
+// The importers' options and report, also reachable here, where models are imported.
+pub use super::import::{ImportOptions, ImportReport};
 
 /// Vertical field of view of the automatic camera, in degrees.
 pub const AUTO_FOV_Y: f32 = 40.0;
