@@ -45,13 +45,16 @@ pub enum GlintError {
         /// The underlying error.
         source: image::ImageError,
     },
+    /// A `key=value` settings override names no setting or its value does not parse.
+    #[error("{0}")]
+    Setting(String),
     /// An imported asset (glTF, OBJ) could not be loaded.
-    #[error("{path}: {message}")]
+    #[error("{path}: {source}")]
     Asset {
         /// The asset file.
         path: PathBuf,
         /// What went wrong.
-        message: String,
+        source: AssetError,
     },
     /// A command-line value is not acceptable.
     #[error("{0}")]
@@ -60,3 +63,45 @@ pub enum GlintError {
 
 /// Shorthand for results with [`GlintError`].
 pub type Result<T, E = GlintError> = std::result::Result<T, E>;
+
+/// Why an imported asset (glTF, OBJ) could not be loaded; [`GlintError::Asset`] adds the file.
+#[derive(Debug, thiserror::Error)]
+pub enum AssetError {
+    /// The glTF file does not parse or validate.
+    #[error("not a valid glTF file: {0}")]
+    Gltf(#[from] gltf::Error),
+    /// A buffer of the glTF file could not be read.
+    #[error("cannot read a buffer: {0}")]
+    GltfBuffer(#[source] gltf::Error),
+    /// The OBJ file could not be read.
+    #[error("cannot read the OBJ file: {0}")]
+    Obj(#[from] tobj::LoadError),
+    /// The file's extension names no model format.
+    #[error("unknown model format (use .gltf, .glb or .obj)")]
+    UnknownFormat,
+    /// The glTF file requires an extension glint does not support.
+    #[error("requires the glTF extension {0}, which glint does not support")]
+    UnsupportedExtension(String),
+    /// The requested glTF scene does not exist.
+    #[error("scene {index} does not exist (the file has {count})")]
+    NoSuchScene {
+        /// The requested scene index.
+        index: usize,
+        /// How many scenes the file has.
+        count: usize,
+    },
+    /// The glTF file has no scene.
+    #[error("the file has no scene")]
+    NoScene,
+    /// A model rendered directly has no triangles.
+    #[error("the file has no triangles to render")]
+    NoTriangles,
+    /// A node, mesh or primitive holds data glint cannot use.
+    #[error("{item}: {problem}")]
+    Invalid {
+        /// The node, mesh or primitive.
+        item: String,
+        /// What is wrong with it.
+        problem: String,
+    },
+}

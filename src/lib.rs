@@ -24,4 +24,5 @@ pub mod test_util;
 pub mod trace;
 
 pub use error::{GlintError, Result};
-pub use render::{Overrides, RenderSummary, Renderer};
+pub use render::{RenderSummary, Renderer};
+pub use scene::Overrides;

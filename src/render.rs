@@ -11,44 +11,13 @@ use crate::error::{GlintError, Result};
 use crate::film::Film;
 use crate::sampling::samples_taken;
 use crate::scene::format::SceneFile;
+use crate::scene::model::{SceneFormat, spawn_model};
 use crate::scene::{Camera, SceneSource, Settings, read_scene, spawn_scene};
 use crate::schedule::{PassControl, add_render_schedules, run_pass, run_passes, run_prepare};
 use crate::stats::RenderStats;
 use crate::trace::plan::RenderPlan;
 
-/// Command-line changes to a scene.
-#[derive(Clone, Debug, Default)]
-pub struct Overrides {
-    /// Image width.
-    pub width: Option<u32>,
-    /// Image height.
-    pub height: Option<u32>,
-    /// Random seed.
-    pub seed: Option<u64>,
-    /// `key=value` settings, applied in order.
-    pub set: Vec<(String, String)>,
-}
-
-impl Overrides {
-    /// Applies the overrides to a parsed scene.
-    pub fn apply(&self, file: &mut SceneFile) -> Result<()> {
-        if let Some(w) = self.width {
-            file.camera.width = w;
-        }
-        if let Some(h) = self.height {
-            file.camera.height = h;
-        }
-        if let Some(seed) = self.seed {
-            file.settings.seed = seed;
-        }
-        for (k, v) in &self.set {
-            file.settings
-                .set(k, v)
-                .map_err(|e| GlintError::Usage(format!("--set {e}")))?;
-        }
-        Ok(())
-    }
-}
+pub use crate::scene::Overrides;
 
 /// What a finished render did.
 #[derive(Clone, Debug)]
@@ -111,12 +80,22 @@ pub struct Renderer {
 impl Renderer {
     /// Loads a scene file and applies `overrides`.
     pub fn from_file(path: &Path, overrides: &Overrides) -> Result<Self> {
-        if crate::scene::model::is_model_file(path) {
-            return Self::from_model(path, overrides);
+        match SceneFormat::of(path) {
+            SceneFormat::Ron => {
+                let mut file = read_scene(path)?;
+                overrides.apply(&mut file)?;
+                Self::from_scene(&file, path)
+            }
+            SceneFormat::Gltf | SceneFormat::Obj => Self::from_model(path, overrides),
         }
-        let mut file = read_scene(path)?;
-        overrides.apply(&mut file)?;
-        Self::from_scene(&file, path)
+    }
+
+    /// Renders a model file (glTF, OBJ) directly, with an automatic camera and light
+    /// where the file has none (see [`spawn_model`]).
+    pub fn from_model(path: &Path, overrides: &Overrides) -> Result<Self> {
+        let mut world = World::new();
+        spawn_model(&mut world, path, overrides)?;
+        Ok(Self::from_world(world))
     }
 
     /// Builds the world from a parsed scene; `path` resolves relative paths.

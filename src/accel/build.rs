@@ -31,22 +31,24 @@ struct Ctx<'a> {
     split: SplitMethod,
 }
 
-/// Builds a BVH over primitive boxes (see [`Bvh::build`]).
-pub fn build(bounds: &[Aabb], split: SplitMethod) -> Bvh {
-    if bounds.is_empty() {
-        return Bvh::default();
-    }
-    let ctx = Ctx {
-        bounds,
-        centroids: bounds.iter().map(Aabb::centroid).collect(),
-        split,
-    };
-    let mut prim_indices: Vec<u32> = (0..bounds.len() as u32).collect();
-    let mut nodes = Vec::with_capacity(bounds.len() / 2 + 1);
-    build_node(&ctx, &mut prim_indices, 0, 1, &mut nodes);
-    Bvh {
-        nodes,
-        prim_indices,
+impl Bvh {
+    /// Builds over primitive bounds (centroids = bounds' centres). Empty input → no nodes.
+    pub fn build(bounds: &[Aabb], split: SplitMethod) -> Bvh {
+        if bounds.is_empty() {
+            return Bvh::default();
+        }
+        let ctx = Ctx {
+            bounds,
+            centroids: bounds.iter().map(Aabb::centroid).collect(),
+            split,
+        };
+        let mut prim_indices: Vec<u32> = (0..bounds.len() as u32).collect();
+        let mut nodes = Vec::with_capacity(bounds.len() / 2 + 1);
+        build_node(&ctx, &mut prim_indices, 0, 1, &mut nodes);
+        Bvh {
+            nodes,
+            prim_indices,
+        }
     }
 }
 

@@ -7,7 +7,6 @@
 use glam::Vec3;
 
 use super::Aabb;
-use super::build;
 
 /// How the builder chooses split planes.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
@@ -82,12 +81,8 @@ pub struct Bvh {
 /// Deepest tree the fixed traversal stack supports (the builder stays within it).
 pub const MAX_DEPTH: u32 = 64;
 
+// `Bvh::build` is in build.rs: the builder depends on the tree, not the reverse.
 impl Bvh {
-    /// Builds over primitive bounds (centroids = bounds' centres). Empty input → no nodes.
-    pub fn build(bounds: &[Aabb], split: SplitMethod) -> Bvh {
-        build::build(bounds, split)
-    }
-
     /// One leaf holding every primitive: the "no acceleration" mode, traversed by the same code.
     pub fn single_leaf(bounds: &[Aabb]) -> Bvh {
         if bounds.is_empty() {

@@ -6,7 +6,7 @@ use std::sync::Arc;
 use bevy_ecs::prelude::*;
 use glam::{Affine3A, Vec2, Vec3};
 
-use crate::shade::texture::{Texture, WrapMode};
+use super::texture::{Texture, WrapMode};
 
 /// Object-to-world placement of a mesh (named destination-from-source).
 #[derive(Component, Clone, Copy, Debug, PartialEq)]
@@ -61,7 +61,7 @@ pub struct Material {
     /// Specular exponent.
     pub shininess: f32,
     /// Alpha: 1 = opaque, 0 = fully transparent.
-    pub transparency: f32,
+    pub alpha: f32,
     /// Optional diffuse texture replacing `kd` when texture mapping is on.
     pub kd_texture: Option<TextureSource>,
     /// Texture wrap modes along u and v.
@@ -75,7 +75,7 @@ impl Default for Material {
             kd: Vec3::splat(0.8),
             ks: Vec3::ZERO,
             shininess: 1.0,
-            transparency: 1.0,
+            alpha: 1.0,
             kd_texture: None,
             wrap: [WrapMode::Clamp; 2],
         }

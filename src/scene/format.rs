@@ -7,7 +7,7 @@ use glam::{Vec2, Vec3};
 use serde::Deserialize;
 
 use super::settings::Settings;
-use crate::shade::texture::WrapMode;
+use super::texture::WrapMode;
 
 /// A whole scene file.
 #[derive(Clone, Debug, Deserialize)]
@@ -68,8 +68,9 @@ pub struct MaterialDesc {
     pub ks: Vec3,
     /// Specular exponent.
     pub shininess: f32,
-    /// Alpha (1 = opaque).
-    pub transparency: f32,
+    /// Alpha (1 = opaque); written `transparency` in RON, as the course's format names it.
+    #[serde(rename = "transparency")]
+    pub alpha: f32,
     /// Diffuse texture file, relative to the scene file.
     pub kd_texture: Option<String>,
     /// Wrap modes along u and v.
@@ -82,7 +83,7 @@ impl Default for MaterialDesc {
             kd: Vec3::splat(0.8),
             ks: Vec3::ZERO,
             shininess: 1.0,
-            transparency: 1.0,
+            alpha: 1.0,
             kd_texture: None,
             wrap: (WrapMode::Clamp, WrapMode::Clamp),
         }

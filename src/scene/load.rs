@@ -10,7 +10,7 @@ use glam::{Affine3A, EulerRot, Quat, Vec3};
 use super::components::*;
 use super::format::*;
 use super::gltf::import_gltf;
-use super::model::ImportOptions;
+use super::import::ImportOptions;
 use super::obj::import_obj;
 use super::settings::Settings;
 use super::shapes;
@@ -192,7 +192,7 @@ fn validate_material(name: &str, d: &MaterialDesc, path: &Path) -> Result<Materi
         kd: c.colour("kd", d.kd)?,
         ks: c.colour("ks", d.ks)?,
         shininess: c.scalar("shininess", d.shininess, 0.0, f32::MAX)?,
-        transparency: c.scalar("transparency", d.transparency, 0.0, 1.0)?,
+        alpha: c.scalar("transparency", d.alpha, 0.0, 1.0)?,
         kd_texture,
         wrap: [d.wrap.0, d.wrap.1],
     })
@@ -363,150 +363,39 @@ fn entity_label(kind: &str, index: usize, name: &Option<String>) -> String {
 /// entities, the settings a resource. On error nothing is left half-spawned in a way
 /// that matters: the caller discards the world.
 pub fn spawn_scene(world: &mut World, file: &SceneFile, path: &Path) -> Result<()> {
-    let mut warnings = Vec::new();
     validate_settings(&file.settings, path)?;
     let camera = validate_camera(&file.camera, path)?;
-
-    let mut materials: HashMap<&str, Entity> = HashMap::new();
-    for (name, desc) in &file.materials {
-        let m = validate_material(name, desc, path)?;
-        let e = world.spawn((Name::new(name.clone()), m)).id();
-        materials.insert(name.as_str(), e);
-    }
-    let material_ref = |c: &Check, name: &Option<String>| -> Result<MaterialRef> {
-        let name = name
-            .as_deref()
-            .ok_or_else(|| c.err("material", "missing"))?;
-        materials.get(name).map(|&e| MaterialRef(e)).ok_or_else(|| {
-            let known: Vec<&str> = materials.keys().copied().collect();
-            c.err(
-                "material",
-                format!(
-                    "unknown material \"{name}\" (defined: {})",
-                    known.join(", ")
-                ),
-            )
-        })
+    let mut spawner = Spawner {
+        path,
+        materials: spawn_materials(world, file, path)?,
+        warnings: Vec::new(),
     };
-
-    // An imported model keeps its own materials unless the entity names one.
-    let import_material = |c: &Check, name: &Option<String>| -> Result<Option<Entity>> {
-        match name {
-            None => Ok(None),
-            Some(_) => material_ref(c, name).map(|m| Some(m.0)),
-        }
-    };
-
     world.spawn((Name::new("camera"), camera));
     for (index, entity) in file.entities.iter().enumerate() {
         match entity {
-            EntityDesc::Mesh(d) => {
-                let c = Check {
-                    path,
-                    entity: entity_label("Mesh", index, &d.name),
-                };
-                let transform = validate_transform(&c, &d.transform)?;
-                let name = Name::new(d.name.clone().unwrap_or_else(|| format!("mesh {index}")));
-                match &d.geometry {
-                    GeometryDesc::Gltf { path: file, scene } => {
-                        let options = ImportOptions {
-                            world_from_file: transform.world_from_object,
-                            material: import_material(&c, &d.material)?,
-                            scene: *scene,
-                        };
-                        import_gltf(world, &resolve(path, file), &options, &mut warnings)?;
-                    }
-                    GeometryDesc::Obj { path: file } => {
-                        let options = ImportOptions {
-                            world_from_file: transform.world_from_object,
-                            material: import_material(&c, &d.material)?,
-                            scene: None,
-                        };
-                        import_obj(world, &resolve(path, file), &options, &mut warnings)?;
-                    }
-                    g => {
-                        let data = shape_mesh(&c, g, &mut warnings)?;
-                        check_world_positions(&c, &data, &transform)?;
-                        let material = material_ref(&c, &d.material)?;
-                        world.spawn((
-                            name,
-                            Mesh {
-                                data: Arc::new(data),
-                            },
-                            transform,
-                            material,
-                        ));
-                    }
-                }
-            }
-            EntityDesc::Sphere(d) => {
-                let c = Check {
-                    path,
-                    entity: entity_label("Sphere", index, &d.name),
-                };
-                let center = c.finite("center", d.center)?;
-                if !(d.radius.is_finite() && d.radius > 0.0) {
-                    return Err(c.err(
-                        "radius",
-                        format!("must be positive and finite, got {}", d.radius),
-                    ));
-                }
-                // The intersection test squares the radius: it must stay a normal f32.
-                if !(d.radius * d.radius).is_normal() {
-                    return Err(c.err(
-                        "radius",
-                        format!(
-                            "{} is out of range: its square over- or underflows f32 (use 1e-18 .. 1e18)",
-                            d.radius
-                        ),
-                    ));
-                }
-                let material = material_ref(&c, &Some(d.material.clone()))?;
-                world.spawn((
-                    Name::new(d.name.clone().unwrap_or_else(|| format!("sphere {index}"))),
-                    Sphere {
-                        center,
-                        radius: d.radius,
-                    },
-                    material,
-                ));
-            }
+            EntityDesc::Mesh(d) => spawner.spawn_mesh(world, index, d)?,
+            EntityDesc::Sphere(d) => spawner.spawn_sphere(world, index, d)?,
             EntityDesc::PointLight(d) => {
-                let c = Check {
-                    path,
-                    entity: entity_label("PointLight", index, &d.name),
-                };
-                world.spawn((
-                    Name::new(d.name.clone().unwrap_or_else(|| format!("light {index}"))),
-                    PointLight {
+                spawner.spawn_light(world, "PointLight", index, &d.name, |c| {
+                    Ok(PointLight {
                         position: c.finite("position", d.position)?,
                         color: c.colour("color", d.color)?,
-                    },
-                ));
+                    })
+                })?
             }
             EntityDesc::SegmentLight(d) => {
-                let c = Check {
-                    path,
-                    entity: entity_label("SegmentLight", index, &d.name),
-                };
-                world.spawn((
-                    Name::new(d.name.clone().unwrap_or_else(|| format!("light {index}"))),
-                    SegmentLight {
+                spawner.spawn_light(world, "SegmentLight", index, &d.name, |c| {
+                    Ok(SegmentLight {
                         endpoint0: c.finite("endpoint0", d.endpoint0)?,
                         endpoint1: c.finite("endpoint1", d.endpoint1)?,
                         color0: c.colour("color0", d.color0)?,
                         color1: c.colour("color1", d.color1)?,
-                    },
-                ));
+                    })
+                })?
             }
             EntityDesc::ParallelogramLight(d) => {
-                let c = Check {
-                    path,
-                    entity: entity_label("ParallelogramLight", index, &d.name),
-                };
-                world.spawn((
-                    Name::new(d.name.clone().unwrap_or_else(|| format!("light {index}"))),
-                    ParallelogramLight {
+                spawner.spawn_light(world, "ParallelogramLight", index, &d.name, |c| {
+                    Ok(ParallelogramLight {
                         v0: c.finite("v0", d.v0)?,
                         edge01: c.finite("edge01", d.edge01)?,
                         edge02: c.finite("edge02", d.edge02)?,
@@ -514,16 +403,165 @@ pub fn spawn_scene(world: &mut World, file: &SceneFile, path: &Path) -> Result<(
                         color1: c.colour("color1", d.color1)?,
                         color2: c.colour("color2", d.color2)?,
                         color3: c.colour("color3", d.color3)?,
-                    },
-                ));
+                    })
+                })?
             }
         }
     }
     world.insert_resource(file.settings.clone());
     world.insert_resource(SceneSource {
         path: path.to_owned(),
-        warnings,
+        warnings: spawner.warnings,
         notes: Vec::new(),
     });
     Ok(())
+}
+
+/// Spawns one entity per material, in name order; the map finds them by name.
+fn spawn_materials<'f>(
+    world: &mut World,
+    file: &'f SceneFile,
+    path: &Path,
+) -> Result<HashMap<&'f str, Entity>> {
+    let mut materials = HashMap::new();
+    for (name, desc) in &file.materials {
+        let m = validate_material(name, desc, path)?;
+        let e = world.spawn((Name::new(name.clone()), m)).id();
+        materials.insert(name.as_str(), e);
+    }
+    Ok(materials)
+}
+
+/// What spawning the scene's entities needs: the file, its materials by name, and the
+/// warnings collected so far.
+struct Spawner<'a> {
+    path: &'a Path,
+    materials: HashMap<&'a str, Entity>,
+    warnings: Vec<String>,
+}
+
+impl<'a> Spawner<'a> {
+    /// The validation context of entity `index` of `kind`.
+    fn check(&self, kind: &str, index: usize, name: &Option<String>) -> Check<'a> {
+        Check {
+            path: self.path,
+            entity: entity_label(kind, index, name),
+        }
+    }
+
+    /// The material entity `name` refers to; an entity must name one.
+    fn material_ref(&self, c: &Check, name: &Option<String>) -> Result<MaterialRef> {
+        let name = name
+            .as_deref()
+            .ok_or_else(|| c.err("material", "missing"))?;
+        self.materials
+            .get(name)
+            .map(|&e| MaterialRef(e))
+            .ok_or_else(|| {
+                let known: Vec<&str> = self.materials.keys().copied().collect();
+                c.err(
+                    "material",
+                    format!(
+                        "unknown material \"{name}\" (defined: {})",
+                        known.join(", ")
+                    ),
+                )
+            })
+    }
+
+    /// The material that replaces an imported model's own: none unless the entity names one.
+    fn import_material(&self, c: &Check, name: &Option<String>) -> Result<Option<Entity>> {
+        match name {
+            None => Ok(None),
+            Some(_) => self.material_ref(c, name).map(|m| Some(m.0)),
+        }
+    }
+
+    /// A mesh: a built-in shape or inline triangles become one entity; a glTF or OBJ file
+    /// is imported with the entity's transform.
+    fn spawn_mesh(&mut self, world: &mut World, index: usize, d: &MeshDesc) -> Result<()> {
+        let c = self.check("Mesh", index, &d.name);
+        let transform = validate_transform(&c, &d.transform)?;
+        let path = self.path;
+        match &d.geometry {
+            GeometryDesc::Gltf { path: file, scene } => {
+                let options = ImportOptions {
+                    world_from_file: transform.world_from_object,
+                    material: self.import_material(&c, &d.material)?,
+                    scene: *scene,
+                };
+                import_gltf(world, &resolve(path, file), &options, &mut self.warnings)?;
+            }
+            GeometryDesc::Obj { path: file } => {
+                let options = ImportOptions {
+                    world_from_file: transform.world_from_object,
+                    material: self.import_material(&c, &d.material)?,
+                    scene: None,
+                };
+                import_obj(world, &resolve(path, file), &options, &mut self.warnings)?;
+            }
+            g => {
+                let data = shape_mesh(&c, g, &mut self.warnings)?;
+                check_world_positions(&c, &data, &transform)?;
+                let material = self.material_ref(&c, &d.material)?;
+                world.spawn((
+                    Name::new(d.name.clone().unwrap_or_else(|| format!("mesh {index}"))),
+                    Mesh {
+                        data: Arc::new(data),
+                    },
+                    transform,
+                    material,
+                ));
+            }
+        }
+        Ok(())
+    }
+
+    fn spawn_sphere(&self, world: &mut World, index: usize, d: &SphereDesc) -> Result<()> {
+        let c = self.check("Sphere", index, &d.name);
+        let center = c.finite("center", d.center)?;
+        if !(d.radius.is_finite() && d.radius > 0.0) {
+            return Err(c.err(
+                "radius",
+                format!("must be positive and finite, got {}", d.radius),
+            ));
+        }
+        // The intersection test squares the radius: it must stay a normal f32.
+        if !(d.radius * d.radius).is_normal() {
+            return Err(c.err(
+                "radius",
+                format!(
+                    "{} is out of range: its square over- or underflows f32 (use 1e-18 .. 1e18)",
+                    d.radius
+                ),
+            ));
+        }
+        let material = self.material_ref(&c, &Some(d.material.clone()))?;
+        world.spawn((
+            Name::new(d.name.clone().unwrap_or_else(|| format!("sphere {index}"))),
+            Sphere {
+                center,
+                radius: d.radius,
+            },
+            material,
+        ));
+        Ok(())
+    }
+
+    /// A light of any kind: `light` validates its fields against the entity's label.
+    fn spawn_light<L: Component>(
+        &self,
+        world: &mut World,
+        kind: &str,
+        index: usize,
+        name: &Option<String>,
+        light: impl FnOnce(&Check) -> Result<L>,
+    ) -> Result<()> {
+        let light = light(&self.check(kind, index, name))?;
+        world.spawn((
+            Name::new(name.clone().unwrap_or_else(|| format!("light {index}"))),
+            light,
+        ));
+        Ok(())
+    }
 }

@@ -9,17 +9,10 @@ use bevy_ecs::prelude::*;
 use glam::{Vec2, Vec3};
 
 use super::components::*;
-use super::model::{ImportOptions, ImportReport, mesh_bounds};
+use super::import::{ImportOptions, ImportReport, asset_err, mesh_bounds};
 use super::shapes;
-use crate::error::{GlintError, Result};
-use crate::shade::texture::WrapMode;
-
-fn asset_err(path: &Path, message: impl Into<String>) -> GlintError {
-    GlintError::Asset {
-        path: path.to_owned(),
-        message: message.into(),
-    }
-}
+use super::texture::WrapMode;
+use crate::error::{AssetError, Result};
 
 /// Finds `name` (relative to `dir`, `\` or `/` separated) as written, or else by a
 /// case-insensitive match of each path component (MTL files from Windows tools often
@@ -60,8 +53,7 @@ pub fn import_obj(
         ignore_points: true,
         ignore_lines: true,
     };
-    let (models, materials) = tobj::load_obj(path, &load)
-        .map_err(|e| asset_err(path, format!("cannot read the OBJ file: {e}")))?;
+    let (models, materials) = tobj::load_obj(path, &load).map_err(|e| asset_err(path, e))?;
     let materials = materials.unwrap_or_else(|e| {
         warnings.push(format!(
             "{}: material library not loaded ({e}); using a default material",
@@ -83,7 +75,15 @@ pub fn import_obj(
         } else {
             format!("\"{}\"", model.name)
         };
-        let data = mesh_data(mesh).map_err(|m| asset_err(path, format!("{label}: {m}")))?;
+        let data = mesh_data(mesh).map_err(|problem| {
+            asset_err(
+                path,
+                AssetError::Invalid {
+                    item: label.clone(),
+                    problem,
+                },
+            )
+        })?;
         let material = match options.material {
             Some(e) => e,
             None => {
@@ -213,7 +213,7 @@ fn material(mtl: &tobj::Material, dir: &Path, path: &Path, warnings: &mut Vec<St
             .shininess
             .filter(|s| s.is_finite() && *s >= 0.0)
             .unwrap_or(1.0),
-        transparency: alpha.clamp(0.0, 1.0),
+        alpha: alpha.clamp(0.0, 1.0),
         kd_texture,
         wrap: [WrapMode::Repeat; 2],
     }

@@ -4,7 +4,7 @@ use bevy_ecs::prelude::*;
 use glam::Vec3;
 use serde::{Deserialize, Serialize};
 
-use crate::shade::gradient::Gradient;
+use super::gradient::Gradient;
 
 /// How a hit is shaded (SPEC "Shading").
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
@@ -35,6 +35,9 @@ pub enum Acceleration {
 }
 
 /// How the BVH chooses its splits.
+///
+/// This mirrors `accel::SplitMethod` because scene sits below accel and must not import
+/// it; the one mapping between the two is `split_method` in src/trace/geometry.rs.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
 #[serde(rename_all = "snake_case")]
 pub enum BvhSplit {

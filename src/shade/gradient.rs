@@ -1,61 +1,16 @@
-//! Linear colour gradients (SPEC "Linear gradient").
+//! Sampling linear colour gradients (SPEC "Linear gradient"); the data type is
+//! `scene::gradient::Gradient`, since settings hold it.
 
 use glam::Vec3;
-use serde::{Deserialize, Serialize};
 
-/// A list of `(t, colour)` components, kept sorted by `t`.
-#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
-#[serde(from = "Vec<(f32, Vec3)>", into = "Vec<(f32, Vec3)>")]
-pub struct Gradient {
-    components: Vec<(f32, Vec3)>,
-}
+pub use crate::scene::gradient::Gradient;
 
-impl From<Vec<(f32, Vec3)>> for Gradient {
-    fn from(components: Vec<(f32, Vec3)>) -> Self {
-        Self::new(components)
-    }
-}
-
-impl From<Gradient> for Vec<(f32, Vec3)> {
-    fn from(g: Gradient) -> Self {
-        g.components
-    }
-}
-
+// Sampling is shading, so it lives here, while the data type lives in scene below shade.
 impl Gradient {
-    /// Builds a gradient from components in any order (sorted here, once).
-    pub fn new(mut components: Vec<(f32, Vec3)>) -> Self {
-        components.sort_by(|a, b| a.0.total_cmp(&b.0));
-        Self { components }
-    }
-
-    /// The components, sorted by `t`.
-    pub fn components(&self) -> &[(f32, Vec3)] {
-        &self.components
-    }
-
-    /// The default shading gradient: dark blue through orange to pale yellow.
-    pub fn default_shading() -> Self {
-        Self::new(vec![
-            (0.0, Vec3::new(0.05, 0.05, 0.3)),
-            (0.5, Vec3::new(0.9, 0.4, 0.1)),
-            (1.0, Vec3::new(1.0, 1.0, 0.7)),
-        ])
-    }
-
-    /// The default comparison gradient: red at -1, dark grey at 0, green at +1.
-    pub fn default_comparison() -> Self {
-        Self::new(vec![
-            (-1.0, Vec3::new(1.0, 0.0, 0.0)),
-            (0.0, Vec3::splat(0.1)),
-            (1.0, Vec3::new(0.0, 1.0, 0.0)),
-        ])
-    }
-
     /// Samples at `t`: linear between the bracketing components, clamped outside.
     /// An empty gradient (rejected at load) samples black.
     pub fn sample(&self, t: f32) -> Vec3 {
-        let c = &self.components;
+        let c = self.components();
         let Some(first) = c.first() else {
             return Vec3::ZERO;
         };

@@ -68,6 +68,8 @@ pub struct SceneGeometry {
     pub sphere_bvh: Bvh,
 }
 
+/// The one mapping from the scene's [`BvhSplit`] to accel's [`SplitMethod`]: scene sits
+/// below accel, so it cannot name `SplitMethod` itself.
 fn split_method(s: &Settings) -> SplitMethod {
     match s.bvh_split {
         BvhSplit::SahBinned => SplitMethod::SahBinned,

@@ -79,7 +79,7 @@ pub fn gather_materials(
             kd: m.kd,
             ks: m.ks,
             shininess: m.shininess,
-            alpha: m.transparency,
+            alpha: m.alpha,
             texture,
             wrap: m.wrap,
         });

@@ -77,7 +77,7 @@ pub fn analyse_scene(
     let lights = lights.iter().len();
     let area_lights = area_lights.iter().len();
     let textured = materials.iter().filter(|m| m.kd_texture.is_some()).count();
-    let transparent = materials.iter().filter(|m| m.transparency < 1.0).count();
+    let transparent = materials.iter().filter(|m| m.alpha < 1.0).count();
     let specular = materials
         .iter()
         .filter(|m| m.ks != glam::Vec3::ZERO)

@@ -10,13 +10,16 @@ use bevy_ecs::prelude::*;
 use glam::{Affine3A, Mat4, Vec2, Vec3};
 use gltf::khr_lights_punctual::Kind as LightKind;
 use gltf::mesh::Mode;
-use gltf::texture::WrappingMode;
 
 use super::components::*;
-use super::model::{ImportOptions, ImportReport, ImportedCamera, mesh_bounds};
+use super::import::{ImportOptions, ImportReport, ImportedCamera, asset_err, mesh_bounds};
 use super::shapes;
-use crate::error::{GlintError, Result};
-use crate::shade::texture::{Texture, WrapMode};
+use super::texture::Texture;
+use crate::error::{AssetError, GlintError, Result};
+
+mod material;
+
+pub use material::{DIELECTRIC_F0, MAX_SHININESS, metallic_roughness_to_phong};
 
 /// Required extensions glint understands; any other in `extensionsRequired` is refused.
 pub const SUPPORTED_REQUIRED_EXTENSIONS: [&str; 3] = [
@@ -25,104 +28,11 @@ pub const SUPPORTED_REQUIRED_EXTENSIONS: [&str; 3] = [
     "KHR_materials_emissive_strength",
 ];
 
-/// Dielectric reflectance at normal incidence (the glTF metallic-roughness model's F0).
-pub const DIELECTRIC_F0: f32 = 0.04;
-/// Largest shininess the roughness mapping produces (roughness 0).
-pub const MAX_SHININESS: f32 = 10_000.0;
-
-fn asset_err(path: &Path, message: impl Into<String>) -> GlintError {
-    GlintError::Asset {
-        path: path.to_owned(),
-        message: message.into(),
-    }
-}
-
-/// Phong-style material parameters of a glTF metallic-roughness material.
-///
-/// `base` is the base colour factor (linear RGB). Returns `(kd scale, ks, shininess)`:
-/// the diffuse colour is `base * kd_scale`. The share of a metal that is smooth becomes
-/// a coloured mirror (`ks`), the rest stays diffuse in the base colour, since a Whitted
-/// tracer has no glossy reflection to show a rough metal with.
-pub fn metallic_roughness_to_phong(base: Vec3, metallic: f32, roughness: f32) -> (f32, Vec3, f32) {
-    let m = metallic.clamp(0.0, 1.0);
-    let r = roughness.clamp(0.0, 1.0);
-    let f0 = Vec3::splat(DIELECTRIC_F0).lerp(base, m);
-    let ks = f0 * (1.0 - r);
-    let kd_scale = 1.0 - m * (1.0 - r);
-    // Blinn-Phong exponent matching a GGX lobe of alpha = roughness^2 (2/alpha^2 - 2).
-    let alpha = r * r;
-    let shininess = if alpha <= 0.0 {
-        MAX_SHININESS
-    } else {
-        (2.0 / (alpha * alpha) - 2.0).clamp(1.0, MAX_SHININESS)
-    };
-    (kd_scale, ks, shininess)
-}
-
 /// Irradiance-equivalent colour of a punctual light of `intensity` (candela) seen from
 /// `distance`: glint lights have no fall-off, so the inverse-square law is applied once,
 /// at the centre of the imported model.
 pub fn point_light_colour(color: Vec3, intensity: f32, distance: f32) -> Vec3 {
     color * intensity / (distance * distance).max(1e-12)
-}
-
-fn wrap_mode(m: WrappingMode) -> WrapMode {
-    match m {
-        WrappingMode::ClampToEdge => WrapMode::Clamp,
-        WrappingMode::MirroredRepeat => WrapMode::MirroredRepeat,
-        WrappingMode::Repeat => WrapMode::Repeat,
-    }
-}
-
-/// Converts gltf's decoded image to an `image` crate image (gltf keeps raw bytes).
-fn dynamic_image(data: gltf::image::Data) -> Option<image::DynamicImage> {
-    use gltf::image::Format;
-    use image::{DynamicImage, ImageBuffer};
-    let (w, h) = (data.width, data.height);
-    let u16s = |b: &[u8]| -> Vec<u16> {
-        b.chunks_exact(2)
-            .map(|c| u16::from_ne_bytes([c[0], c[1]]))
-            .collect()
-    };
-    let f32s = |b: &[u8]| -> Vec<f32> {
-        b.chunks_exact(4)
-            .map(|c| f32::from_ne_bytes([c[0], c[1], c[2], c[3]]))
-            .collect()
-    };
-    let p = data.pixels;
-    Some(match data.format {
-        Format::R8 => DynamicImage::ImageLuma8(ImageBuffer::from_raw(w, h, p)?),
-        Format::R8G8 => DynamicImage::ImageLumaA8(ImageBuffer::from_raw(w, h, p)?),
-        Format::R8G8B8 => DynamicImage::ImageRgb8(ImageBuffer::from_raw(w, h, p)?),
-        Format::R8G8B8A8 => DynamicImage::ImageRgba8(ImageBuffer::from_raw(w, h, p)?),
-        Format::R16 => DynamicImage::ImageLuma16(ImageBuffer::from_raw(w, h, u16s(&p))?),
-        Format::R16G16 => DynamicImage::ImageLumaA16(ImageBuffer::from_raw(w, h, u16s(&p))?),
-        Format::R16G16B16 => DynamicImage::ImageRgb16(ImageBuffer::from_raw(w, h, u16s(&p))?),
-        Format::R16G16B16A16 => DynamicImage::ImageRgba16(ImageBuffer::from_raw(w, h, u16s(&p))?),
-        Format::R32G32B32FLOAT => DynamicImage::ImageRgb32F(ImageBuffer::from_raw(w, h, f32s(&p))?),
-        Format::R32G32B32A32FLOAT => {
-            DynamicImage::ImageRgba32F(ImageBuffer::from_raw(w, h, f32s(&p))?)
-        }
-    })
-}
-
-/// The KHR_texture_transform matrix (glTF's uv convention): translation * rotation * scale.
-fn texture_transform(t: &gltf::texture::TextureTransform) -> glam::Affine2 {
-    let [ox, oy] = t.offset();
-    let [sx, sy] = t.scale();
-    let (s, c) = t.rotation().sin_cos();
-    // The extension's rotation matrix is [c s; -s c] (row-major), i.e. columns (c, -s), (s, c).
-    let rotation = glam::Mat2::from_cols(Vec2::new(c, -s), Vec2::new(s, c));
-    glam::Affine2::from_mat2_translation(
-        rotation * glam::Mat2::from_diagonal(Vec2::new(sx, sy)),
-        Vec2::new(ox, oy),
-    )
-}
-
-/// What a primitive needs from its material to build its vertices.
-struct UvChoice {
-    set: u32,
-    transform: Option<glam::Affine2>,
 }
 
 /// Import state: the document, its buffers and the caches that make instancing share data.
@@ -158,32 +68,32 @@ pub fn import_gltf(
         source,
     })?;
     // Check the required extensions first: the crate's own refusal does not name them.
-    let unvalidated = gltf::Gltf::from_slice_without_validation(&bytes)
-        .map_err(|e| asset_err(path, format!("not a valid glTF file: {e}")))?;
+    let unvalidated =
+        gltf::Gltf::from_slice_without_validation(&bytes).map_err(|e| asset_err(path, e))?;
     for ext in unvalidated.extensions_required() {
         if !SUPPORTED_REQUIRED_EXTENSIONS.contains(&ext) {
             return Err(asset_err(
                 path,
-                format!("requires the glTF extension {ext}, which glint does not support"),
+                AssetError::UnsupportedExtension(ext.to_owned()),
             ));
         }
     }
     drop(unvalidated);
-    let gltf::Gltf { document, blob } = gltf::Gltf::from_slice(&bytes)
-        .map_err(|e| asset_err(path, format!("not a valid glTF file: {e}")))?;
+    let gltf::Gltf { document, blob } =
+        gltf::Gltf::from_slice(&bytes).map_err(|e| asset_err(path, e))?;
     drop(bytes);
     let base = path.parent().unwrap_or(Path::new("."));
     let buffers = gltf::import_buffers(&document, Some(base), blob)
-        .map_err(|e| asset_err(path, format!("cannot read a buffer: {e}")))?;
+        .map_err(|e| asset_err(path, AssetError::GltfBuffer(e)))?;
 
     let scene = match options.scene {
-        Some(i) => document.scenes().nth(i).ok_or_else(|| {
+        Some(index) => document.scenes().nth(index).ok_or_else(|| {
             asset_err(
                 path,
-                format!(
-                    "scene {i} does not exist (the file has {})",
-                    document.scenes().len()
-                ),
+                AssetError::NoSuchScene {
+                    index,
+                    count: document.scenes().len(),
+                },
             )
         })?,
         None => match document
@@ -191,7 +101,7 @@ pub fn import_gltf(
             .or_else(|| document.scenes().next())
         {
             Some(s) => s,
-            None => return Err(asset_err(path, "the file has no scene")),
+            None => return Err(asset_err(path, AssetError::NoScene)),
         },
     };
 
@@ -244,7 +154,10 @@ impl<'a> Importer<'a> {
         if !file_from_node.is_finite() {
             return Err(asset_err(
                 self.path,
-                format!("node {}: transform is not finite", node_label(node)),
+                AssetError::Invalid {
+                    item: format!("node {}", node_label(node)),
+                    problem: "transform is not finite".into(),
+                },
             ));
         }
         let world_from_node = self.options.world_from_file * Affine3A::from_mat4(file_from_node);
@@ -320,32 +233,6 @@ impl<'a> Importer<'a> {
         Ok(())
     }
 
-    /// Which texture coordinate set (and transform) the base colour texture reads.
-    fn uv_choice(&self, material: &gltf::Material) -> UvChoice {
-        if self.options.material.is_some() {
-            return UvChoice {
-                set: 0,
-                transform: None,
-            };
-        }
-        match material.pbr_metallic_roughness().base_color_texture() {
-            Some(info) => {
-                let t = info.texture_transform();
-                UvChoice {
-                    set: t
-                        .as_ref()
-                        .and_then(|t| t.tex_coord())
-                        .unwrap_or(info.tex_coord()),
-                    transform: t.as_ref().map(texture_transform),
-                }
-            }
-            None => UvChoice {
-                set: 0,
-                transform: None,
-            },
-        }
-    }
-
     fn read_primitive(
         &mut self,
         mesh: &gltf::Mesh,
@@ -354,7 +241,15 @@ impl<'a> Importer<'a> {
         warnings: &mut Vec<String>,
     ) -> Result<MeshData> {
         let label = format!("mesh {} primitive {}", mesh_label(mesh), primitive.index());
-        let err = |m: &str| asset_err(self.path, format!("{label}: {m}"));
+        let err = |problem: &str| {
+            asset_err(
+                self.path,
+                AssetError::Invalid {
+                    item: label.clone(),
+                    problem: problem.to_owned(),
+                },
+            )
+        };
         let buffers = self.buffers;
         let reader = primitive.reader(|b| buffers.get(b.index()).map(|d| &d.0[..]));
         let positions: Vec<Vec3> = reader
@@ -441,84 +336,6 @@ impl<'a> Importer<'a> {
             }
         }
         Ok(data)
-    }
-
-    fn material(&mut self, world: &mut World, m: &gltf::Material) -> Entity {
-        if let Some(&e) = self.materials.get(&m.index()) {
-            return e;
-        }
-        let name = match (m.name(), m.index()) {
-            (Some(n), _) => n.to_owned(),
-            (None, Some(i)) => format!("material {i}"),
-            (None, None) => "glTF default material".to_owned(),
-        };
-        let pbr = m.pbr_metallic_roughness();
-        let [r, g, b, a] = pbr.base_color_factor();
-        let base = Vec3::new(r, g, b).max(Vec3::ZERO);
-        let (kd_scale, ks, shininess) =
-            metallic_roughness_to_phong(base, pbr.metallic_factor(), pbr.roughness_factor());
-        let transparency = match m.alpha_mode() {
-            gltf::material::AlphaMode::Opaque => 1.0,
-            gltf::material::AlphaMode::Blend => a.clamp(0.0, 1.0),
-            gltf::material::AlphaMode::Mask => {
-                if a >= m.alpha_cutoff().unwrap_or(0.5) {
-                    1.0
-                } else {
-                    0.0
-                }
-            }
-        };
-        if Vec3::from_array(m.emissive_factor()).max_element() > 0.0 {
-            self.emissive.push(format!("\"{name}\""));
-        }
-        let kd = base * kd_scale;
-        let (kd_texture, wrap) = match pbr.base_color_texture() {
-            Some(info) => {
-                let texture = info.texture();
-                let sampler = texture.sampler();
-                let wrap = [wrap_mode(sampler.wrap_s()), wrap_mode(sampler.wrap_t())];
-                (self.texture(texture.source().index(), kd), wrap)
-            }
-            None => (None, [WrapMode::Repeat; 2]),
-        };
-        let e = world
-            .spawn((
-                Name::new(name.clone()),
-                Material {
-                    name,
-                    kd,
-                    ks,
-                    shininess,
-                    transparency,
-                    kd_texture,
-                    wrap,
-                },
-            ))
-            .id();
-        self.materials.insert(m.index(), e);
-        e
-    }
-
-    /// The base colour texture times `scale` (the factor and the metallic share), decoded
-    /// from sRGB once per (image, scale). An image that cannot be decoded is reported as a
-    /// missing texture: the material keeps its plain colour.
-    fn texture(&mut self, image: usize, scale: Vec3) -> Option<TextureSource> {
-        let key = (image, scale.to_array().map(f32::to_bits));
-        if let Some(t) = self.textures.get(&key) {
-            return Some(TextureSource::Decoded(t.clone()));
-        }
-        let source = self.document.images().nth(image)?.source();
-        let base = self.path.parent().unwrap_or(Path::new("."));
-        let data = gltf::image::Data::from_source(source, Some(base), self.buffers).ok()?;
-        let mut texture = Texture::from_image(&dynamic_image(data)?, true);
-        if scale != Vec3::ONE {
-            for t in &mut texture.texels {
-                *t *= scale;
-            }
-        }
-        let texture = Arc::new(texture);
-        self.textures.insert(key, texture.clone());
-        Some(TextureSource::Decoded(texture))
     }
 
     fn add_camera(
@@ -628,34 +445,4 @@ fn node_label(node: &gltf::Node) -> String {
 fn mesh_label(mesh: &gltf::Mesh) -> String {
     mesh.name()
         .map_or_else(|| format!("{}", mesh.index()), |n| format!("\"{n}\""))
-}
-
-#[cfg(test)]
-mod tests {
-    use super::*;
-
-    #[test]
-    fn mapping_extremes() {
-        let base = Vec3::new(0.8, 0.4, 0.2);
-        // Rough dielectric: diffuse base colour, no specular.
-        let (s, ks, n) = metallic_roughness_to_phong(base, 0.0, 1.0);
-        assert_eq!((s, ks, n), (1.0, Vec3::ZERO, 1.0));
-        // Smooth metal: a mirror in the base colour.
-        let (s, ks, n) = metallic_roughness_to_phong(base, 1.0, 0.0);
-        assert_eq!((s, ks, n), (0.0, base, MAX_SHININESS));
-        // Smooth dielectric: 4 % grey mirror.
-        let (_, ks, _) = metallic_roughness_to_phong(base, 0.0, 0.0);
-        assert_eq!(ks, Vec3::splat(DIELECTRIC_F0));
-        // Half roughness: alpha = 1/4, n = 2/(1/16) - 2 = 30.
-        let (_, _, n) = metallic_roughness_to_phong(base, 0.0, 0.5);
-        assert!((n - 30.0).abs() < 1e-4);
-    }
-
-    #[test]
-    fn rotation_matrix() {
-        // KHR_texture_transform rotates uv (1, 0) by +90 degrees to (0, -1).
-        let (s, c) = std::f32::consts::FRAC_PI_2.sin_cos();
-        let r = glam::Mat2::from_cols(Vec2::new(c, -s), Vec2::new(s, c));
-        assert!((r * Vec2::X).abs_diff_eq(Vec2::new(0.0, -1.0), 1e-6));
-    }
 }
