@@ -2,6 +2,8 @@
 //! folders that remove themselves.
 #![allow(dead_code)]
 
+pub mod assets;
+
 use std::path::{Path, PathBuf};
 
 use glam::Vec3;
