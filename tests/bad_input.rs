@@ -162,7 +162,7 @@ fn the_cli_renders_a_good_scene_and_prints_a_summary() {
     assert!(stderr.contains("Mrays/s"), "{stderr}");
     let img = image::open(dir.join("out.png")).unwrap();
     assert_eq!((img.width(), img.height()), (8, 8));
-    let leftovers: Vec<_> = std::fs::read_dir(&dir)
+    let leftovers: Vec<_> = std::fs::read_dir(dir)
         .unwrap()
         .filter_map(|e| e.ok())
         .filter(|e| e.file_name().to_string_lossy().ends_with(".tmp"))
@@ -186,7 +186,7 @@ fn the_cli_fails_with_one_line_and_keeps_the_old_image() {
     // An existing image survives a failing run untouched.
     std::fs::write(dir.join("out.png"), b"previous").unwrap();
     let out = Command::new(env!("CARGO_BIN_EXE_glint"))
-        .current_dir(&dir)
+        .current_dir(dir)
         .args(["render", "scene.ron", "-o", "out.png"])
         .output()
         .unwrap();
@@ -227,7 +227,7 @@ fn info_explains_the_plan() {
     let dir = tmp.path();
     assert!(ok);
     let out = Command::new(env!("CARGO_BIN_EXE_glint"))
-        .current_dir(&dir)
+        .current_dir(dir)
         .args(["info", "scene.ron", "--set", "shadows=false"])
         .output()
         .unwrap();

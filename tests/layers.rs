@@ -463,10 +463,7 @@ fn top_level_modules_form_no_cycle() {
     let mut found = Vec::new();
     for component in strongly_connected(&modules, &edges) {
         let members: BTreeSet<&String> = component.iter().collect();
-        let mut lines = vec![format!(
-            "cycle among {}",
-            component.iter().cloned().collect::<Vec<_>>().join(", ")
-        )];
+        let mut lines = vec![format!("cycle among {}", component.join(", "))];
         for from in &component {
             for (to, at) in &edges[from] {
                 if members.contains(to) {
