@@ -3,10 +3,10 @@
 
 mod common;
 
-use std::path::PathBuf;
 use std::process::Command;
 
 use common::*;
+use tempfile::TempDir;
 
 const GOOD: &str = r#"(
     camera: (position: (0, 0, 3), look_at: (0, 0, 0), fov_y: 40, width: 8, height: 8),
@@ -139,19 +139,13 @@ fn degenerate_cameras_and_settings_are_rejected() {
 }
 
 /// Runs the real binary in a fresh temporary folder holding `scene.ron`.
-fn run_cli(scene: Option<&str>, args: &[&str]) -> (bool, String, PathBuf) {
-    let dir = std::env::temp_dir().join(format!(
-        "glint-cli-{}-{}",
-        std::process::id(),
-        args.join("_").replace(['/', '.', '='], "")
-    ));
-    let _ = std::fs::remove_dir_all(&dir);
-    std::fs::create_dir_all(&dir).unwrap();
-    if let Some(s) = scene {
-        std::fs::write(dir.join("scene.ron"), s).unwrap();
-    }
+fn run_cli(scene: Option<&str>, args: &[&str]) -> (bool, String, TempDir) {
+    let dir = match scene {
+        Some(s) => scene_dir(s),
+        None => temp_dir(),
+    };
     let out = Command::new(env!("CARGO_BIN_EXE_glint"))
-        .current_dir(&dir)
+        .current_dir(dir.path())
         .args(args)
         .output()
         .unwrap();
@@ -161,13 +155,14 @@ fn run_cli(scene: Option<&str>, args: &[&str]) -> (bool, String, PathBuf) {
 
 #[test]
 fn the_cli_renders_a_good_scene_and_prints_a_summary() {
-    let (ok, stderr, dir) = run_cli(Some(GOOD), &["render", "scene.ron", "-o", "out.png"]);
+    let (ok, stderr, tmp) = run_cli(Some(GOOD), &["render", "scene.ron", "-o", "out.png"]);
+    let dir = tmp.path();
     assert!(ok, "{stderr}");
     assert!(stderr.contains("8x8, 1 spp"), "{stderr}");
     assert!(stderr.contains("Mrays/s"), "{stderr}");
     let img = image::open(dir.join("out.png")).unwrap();
     assert_eq!((img.width(), img.height()), (8, 8));
-    let leftovers: Vec<_> = std::fs::read_dir(&dir)
+    let leftovers: Vec<_> = std::fs::read_dir(dir)
         .unwrap()
         .filter_map(|e| e.ok())
         .filter(|e| e.file_name().to_string_lossy().ends_with(".tmp"))
@@ -178,7 +173,8 @@ fn the_cli_renders_a_good_scene_and_prints_a_summary() {
 #[test]
 fn the_cli_fails_with_one_line_and_keeps_the_old_image() {
     let broken = GOOD.replacen("radius: 1,", "radius: -1,", 1);
-    let (ok, stderr, dir) = run_cli(Some(&broken), &["render", "scene.ron", "-o", "out.png"]);
+    let (ok, stderr, tmp) = run_cli(Some(&broken), &["render", "scene.ron", "-o", "out.png"]);
+    let dir = tmp.path();
     assert!(!ok);
     assert_eq!(stderr.lines().count(), 1, "{stderr}");
     assert!(
@@ -190,7 +186,7 @@ fn the_cli_fails_with_one_line_and_keeps_the_old_image() {
     // An existing image survives a failing run untouched.
     std::fs::write(dir.join("out.png"), b"previous").unwrap();
     let out = Command::new(env!("CARGO_BIN_EXE_glint"))
-        .current_dir(&dir)
+        .current_dir(dir)
         .args(["render", "scene.ron", "-o", "out.png"])
         .output()
         .unwrap();
@@ -227,10 +223,11 @@ fn the_cli_rejects_unknown_settings_and_output_formats() {
 
 #[test]
 fn info_explains_the_plan() {
-    let (ok, _, dir) = run_cli(Some(GOOD), &["info", "scene.ron"]);
+    let (ok, _, tmp) = run_cli(Some(GOOD), &["info", "scene.ron"]);
+    let dir = tmp.path();
     assert!(ok);
     let out = Command::new(env!("CARGO_BIN_EXE_glint"))
-        .current_dir(&dir)
+        .current_dir(dir)
         .args(["info", "scene.ron", "--set", "shadows=false"])
         .output()
         .unwrap();

@@ -1,38 +1,20 @@
 //! `glint converge`: error against a reference per pass, the CSV, the plot and the
 //! reference cache, on small scenes with an area light.
 
-use std::path::{Path, PathBuf};
+mod common;
+
+use std::path::Path;
+
+use common::*;
 
 use glint::converge::{
     CSV_COLUMNS, ConvergeOptions, ConvergeReport, ReferenceSource, reference::ReferenceOrigin, run,
 };
 use glint::{Overrides, Renderer};
 
-/// A sphere on a floor under a square area light: smooth silhouette edges against
-/// the background and soft shadows. `{settings}` is spliced into the settings.
+/// The shared area-light scene at 32x32; `settings` is spliced into its settings.
 fn scene_text(settings: &str) -> String {
-    format!(
-        r#"(
-    camera: (position: (0.0, 1.5, 4.0), look_at: (0.0, 0.5, 0.0), fov_y: 40.0, width: 32, height: 32),
-    settings: (shading_model: lambertian, reflections: false, background: (0.3, 0.3, 0.3), {settings}),
-    materials: {{ "white": (kd: (0.8, 0.8, 0.8)), "red": (kd: (0.8, 0.2, 0.2)) }},
-    entities: [
-        Mesh((material: Some("white"), geometry: Parallelogram(origin: (-3.0, 0.0, 3.0),
-            edge_u: (6.0, 0.0, 0.0), edge_v: (0.0, 0.0, -6.0)))),
-        Sphere((center: (0.0, 0.6, 0.0), radius: 0.5, material: "red")),
-        ParallelogramLight((v0: (-0.5, 2.5, -0.5), edge01: (1.0, 0.0, 0.0), edge02: (0.0, 0.0, 1.0))),
-    ],
-)"#
-    )
-}
-
-/// A fresh folder holding `scene.ron` with `text`.
-fn scene_dir(name: &str, text: &str) -> PathBuf {
-    let dir = std::env::temp_dir().join(format!("glint-converge-{name}-{}", std::process::id()));
-    let _ = std::fs::remove_dir_all(&dir);
-    std::fs::create_dir_all(&dir).unwrap();
-    std::fs::write(dir.join("scene.ron"), text).unwrap();
-    dir
+    sphere_under_area_light(32, &format!("reflections: false, {settings}"))
 }
 
 fn options(scene: &Path, reference_spp: u32, max_spp: u32) -> ConvergeOptions {
@@ -65,10 +47,10 @@ fn rmse_at(report: &ConvergeReport, curve: usize, spp: u32) -> f64 {
 
 #[test]
 fn rmse_falls_with_spp_on_an_area_light_scene() {
-    let dir = scene_dir(
-        "falls",
-        &scene_text("pixel_samples: 16, pixel_sampling: uniform, shadow_samples: 4, seed: 3"),
-    );
+    let tmp = scene_dir(&scene_text(
+        "pixel_samples: 16, pixel_sampling: uniform, shadow_samples: 4, seed: 3",
+    ));
+    let dir = tmp.path();
     let report = run_quiet(&options(&dir.join("scene.ron"), 1024, 64));
     let c = &report.curves[0];
     assert_eq!(c.passes.len(), 64, "uniform: one measured pass per sample");
@@ -83,15 +65,12 @@ fn rmse_falls_with_spp_on_an_area_light_scene() {
     for w in c.passes.windows(2) {
         assert!(w[1].seconds >= w[0].seconds && w[1].rays > w[0].rays && w[1].spp > w[0].spp);
     }
-    std::fs::remove_dir_all(&dir).unwrap();
 }
 
 #[test]
 fn stratified_beats_uniform_at_equal_spp() {
-    let dir = scene_dir(
-        "strata",
-        &scene_text("pixel_samples: 16, shadow_samples: 16"),
-    );
+    let tmp = scene_dir(&scene_text("pixel_samples: 16, shadow_samples: 16"));
+    let dir = tmp.path();
     let mut o = options(&dir.join("scene.ron"), 1024, 16);
     // Four seeds per pattern: one 32x32 image's RMSE hinges on a few edge pixels
     // (single-seed RMSE ratios measured 0.56-0.85); the summed MSE is steadier.
@@ -117,13 +96,13 @@ fn stratified_beats_uniform_at_equal_spp() {
         stratified < 0.7 * uniform,
         "summed MSE: stratified {stratified} vs uniform {uniform}"
     );
-    std::fs::remove_dir_all(&dir).unwrap();
 }
 
 #[test]
 fn csv_plot_and_reference_cache() {
     let text = scene_text("pixel_samples: 4, shadow_samples: 2, seed: 5");
-    let dir = scene_dir("csv", &text);
+    let tmp = scene_dir(&text);
+    let dir = tmp.path();
     let scene = dir.join("scene.ron");
     let mut o = options(&scene, 16, 4);
     o.compare = vec![(
@@ -178,12 +157,12 @@ fn csv_plot_and_reference_cache() {
         ReferenceOrigin::Rendered(p) => assert_ne!(p, cache),
         other => panic!("changed scene must re-render: {other:?}"),
     }
-    std::fs::remove_dir_all(&dir).unwrap();
 }
 
 #[test]
 fn supplied_reference_of_the_wrong_size_is_a_clear_error() {
-    let dir = scene_dir("size", &scene_text("pixel_samples: 4"));
+    let tmp = scene_dir(&scene_text("pixel_samples: 4"));
+    let dir = tmp.path();
     let reference = dir.join("ref.exr");
     glint::film::write_image(
         &reference,
@@ -197,13 +176,13 @@ fn supplied_reference_of_the_wrong_size_is_a_clear_error() {
     o.reference = ReferenceSource::File(reference);
     let err = run(&o, &mut |_| {}).unwrap_err().to_string();
     assert!(err.contains("8x8") && err.contains("32x32"), "{err}");
-    std::fs::remove_dir_all(&dir).unwrap();
 }
 
 #[test]
 fn supplied_reference_equal_to_the_render_gives_zero_error() {
     let text = scene_text("pixel_samples: 4, seed: 2");
-    let dir = scene_dir("exact", &text);
+    let tmp = scene_dir(&text);
+    let dir = tmp.path();
     let scene = dir.join("scene.ron");
     // The 4-spp render itself, as an EXR: the last pass must match it exactly.
     let mut r = Renderer::from_file(&scene, &Overrides::default()).unwrap();
@@ -226,5 +205,4 @@ fn supplied_reference_equal_to_the_render_gives_zero_error() {
     assert_eq!(last.spp, 4);
     assert_eq!(last.error.rmse, 0.0);
     assert!(report.curves[0].passes[0].error.rmse > 0.0);
-    std::fs::remove_dir_all(&dir).unwrap();
 }

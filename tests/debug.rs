@@ -1,10 +1,12 @@
 //! System-level tests of the visual debug: the debug trace runs the render's own
 //! schedules, its emitters spawn the expected entities, and the view projects and clips.
 
+mod common;
+
 use std::path::Path;
 
+use common::{load_file, parse, render_file, scene_path, temp_dir};
 use glam::{Vec2, Vec3};
-use glint::Renderer;
 use glint::accel::TraversalStats;
 use glint::debug::overlay::{Canvas, OverlayInput, draw_world};
 use glint::debug::{
@@ -12,22 +14,12 @@ use glint::debug::{
     ViewCamera, debug_emit_schedule,
 };
 use glint::scene::format::SceneFile;
-use glint::scene::{Camera, parse_scene, read_scene};
+use glint::scene::{Camera, read_scene};
 use glint::trace::geometry::SceneGeometry;
 use glint::trace::wavefront::camera_ray;
 
-fn parse(text: &str) -> SceneFile {
-    parse_scene(text, Path::new("test.ron")).expect("test scene parses")
-}
-
-fn render(file: &SceneFile) -> Renderer {
-    let mut r = Renderer::from_scene(file, Path::new("test.ron")).unwrap();
-    r.render(None, &mut |_| {}).unwrap();
-    r
-}
-
 fn debug(file: &SceneFile, request: DebugRequest) -> DebugSession {
-    DebugSession::trace(file, Path::new("test.ron"), request).unwrap()
+    DebugSession::trace(file, &scene_path(), request).unwrap()
 }
 
 fn only(x: u32, y: u32, features: &[Feature]) -> DebugRequest {
@@ -123,7 +115,7 @@ fn debug_colour_equals_rendered_colour() {
     file.camera.height = 64;
     scenes.push(("cornell", file));
     for (name, file) in &scenes {
-        let rendered = render(file);
+        let rendered = render_file(file);
         let film = rendered.film();
         let (w, h) = (film.width, film.height);
         let mut lit = 0;
@@ -147,7 +139,7 @@ fn debug_colour_equals_rendered_colour() {
 #[test]
 fn normal_render_spawns_no_debug_entities() {
     let file = parse(BUSY);
-    let mut r = Renderer::from_scene(&file, Path::new("test.ron")).unwrap();
+    let mut r = load_file(&file);
     // Even with the emitters registered, a render without a debug trace emits nothing.
     r.world.add_schedule(debug_emit_schedule());
     r.render(None, &mut |_| {}).unwrap();
@@ -382,9 +374,8 @@ fn emitters_run_only_for_features_on_and_asked() {
 
 #[test]
 fn texture_panel_marks_the_looked_up_texels() {
-    let dir = std::env::temp_dir().join(format!("glint-debug-tex-{}", std::process::id()));
-    std::fs::create_dir_all(&dir).unwrap();
-    let png = dir.join("checker.png");
+    let tmp = temp_dir();
+    let png = tmp.path().join("checker.png");
     let img = image::RgbImage::from_fn(4, 4, |i, j| {
         image::Rgb([(i * 60) as u8, (j * 60) as u8, 100])
     });
@@ -441,9 +432,8 @@ fn texture_panel_marks_the_looked_up_texels() {
             assert_eq!(texels, vec![([1, 0], 1.0)]);
         }
         // The debug colour is the rendered one (shading off: the texel colour itself).
-        assert_eq!(s.pixel_color(), render(&file).film().pixel(16, 16));
+        assert_eq!(s.pixel_color(), render_file(&file).film().pixel(16, 16));
     }
-    std::fs::remove_dir_all(&dir).unwrap();
 }
 
 fn test_view() -> ViewCamera {
@@ -567,8 +557,6 @@ fn dump_lists_entities_as_ron() {
 
 #[test]
 fn debug_image_is_written() {
-    let dir = std::env::temp_dir().join(format!("glint-debug-img-{}", std::process::id()));
-    std::fs::create_dir_all(&dir).unwrap();
     let mut s = debug(&parse(BUSY), DebugRequest::all(24, 20));
     let view = s.view(None, 160, 120);
     // The auto view is not the render camera.
@@ -577,5 +565,4 @@ fn debug_image_is_written() {
     let canvas = s.draw(&view, background.clone(), true);
     assert_eq!((canvas.width, canvas.height), (160, 120));
     assert_ne!(canvas.pixels, background.pixels, "something was drawn");
-    std::fs::remove_dir_all(&dir).unwrap();
 }

@@ -1,39 +1,23 @@
 //! Progressive rendering: a time-budgeted or interrupted render equals a fixed-spp
 //! render with the samples it reached; Ctrl-C on `glint render` writes the image.
 
-use std::path::Path;
+mod common;
+
 use std::sync::Arc;
 use std::sync::atomic::{AtomicBool, Ordering};
 use std::time::Duration;
 
+use common::*;
 use glint::Renderer;
-use glint::scene::parse_scene;
 
-/// A sphere on a floor under a square area light, `size` pixels square.
+/// The shared area-light scene, `size` pixels square, seed 9.
 fn scene(size: u32, settings: &str) -> String {
-    format!(
-        r#"(
-    camera: (position: (0.0, 1.5, 4.0), look_at: (0.0, 0.5, 0.0), width: {size}, height: {size}),
-    settings: (shading_model: lambertian, background: (0.3, 0.3, 0.3), seed: 9, {settings}),
-    materials: {{ "white": (kd: (0.8, 0.8, 0.8)), "red": (kd: (0.8, 0.2, 0.2)) }},
-    entities: [
-        Mesh((material: Some("white"), geometry: Parallelogram(origin: (-3.0, 0.0, 3.0),
-            edge_u: (6.0, 0.0, 0.0), edge_v: (0.0, 0.0, -6.0)))),
-        Sphere((center: (0.0, 0.6, 0.0), radius: 0.5, material: "red")),
-        ParallelogramLight((v0: (-0.5, 2.5, -0.5), edge01: (1.0, 0.0, 0.0), edge02: (0.0, 0.0, 1.0))),
-    ],
-)"#
-    )
-}
-
-fn renderer(text: &str) -> Renderer {
-    let path = Path::new("progressive.ron");
-    Renderer::from_scene(&parse_scene(text, path).unwrap(), path).unwrap()
+    sphere_under_area_light(size, &format!("seed: 9, {settings}"))
 }
 
 /// A fixed render of `spp` uniform samples per pixel.
 fn fixed(size: u32, spp: u32) -> Renderer {
-    let mut r = renderer(&scene(
+    let mut r = load(&scene(
         size,
         &format!("pixel_samples: {spp}, pixel_sampling: uniform"),
     ));
@@ -45,7 +29,7 @@ fn fixed(size: u32, spp: u32) -> Renderer {
 
 #[test]
 fn time_budgeted_render_equals_fixed_spp_render() {
-    let mut r = renderer(&scene(16, "pixel_samples: 64, pixel_sampling: uniform"));
+    let mut r = load(&scene(16, "pixel_samples: 64, pixel_sampling: uniform"));
     // Each pass sleeps 20 ms, so a 200 ms budget stops after about ten passes, far
     // from both 1 (which samples pixel centres) and 64.
     let summary = r
@@ -63,7 +47,7 @@ fn time_budgeted_render_equals_fixed_spp_render() {
 
 #[test]
 fn interrupt_between_passes_keeps_whole_passes() {
-    let mut r = renderer(&scene(32, "pixel_samples: 16, pixel_sampling: uniform"));
+    let mut r = load(&scene(32, "pixel_samples: 16, pixel_sampling: uniform"));
     let flag = Arc::new(AtomicBool::new(false));
     r.set_interrupt(flag.clone());
     // 32x32 is one region, so the callback runs once per pass: stop after pass 3.
@@ -84,7 +68,7 @@ fn interrupt_between_passes_keeps_whole_passes() {
 #[test]
 fn interrupt_between_regions_finishes_the_region_in_flight() {
     // 260x260 pixels is two regions (65536 + 32064 pixels).
-    let mut r = renderer(&scene(
+    let mut r = load(&scene(
         260,
         "pixel_samples: 8, pixel_sampling: uniform, shadow_samples: 1",
     ));
@@ -118,8 +102,8 @@ fn ctrl_c_writes_the_image_so_far() {
         eprintln!("skipped: no `kill` command to send SIGINT");
         return;
     }
-    let dir = std::env::temp_dir().join(format!("glint-ctrlc-{}", std::process::id()));
-    std::fs::create_dir_all(&dir).unwrap();
+    let tmp = temp_dir();
+    let dir = tmp.path();
     let scene_path = dir.join("scene.ron");
     // Far more samples than the test waits for.
     std::fs::write(
@@ -152,5 +136,4 @@ fn ctrl_c_writes_the_image_so_far() {
     let img = image::open(&output).unwrap().into_rgb32f();
     assert_eq!(img.dimensions(), (64, 64));
     assert!(img.pixels().any(|p| p.0[0] > 0.0), "the image has samples");
-    std::fs::remove_dir_all(&dir).unwrap();
 }

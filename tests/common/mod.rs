@@ -1,24 +1,86 @@
-//! Helpers shared by the system-level tests: build a World from RON text and render it.
+//! Helpers shared by the test files: scenes from RON text, rendering them, temporary
+//! folders that remove themselves.
 #![allow(dead_code)]
 
-use std::path::Path;
+pub mod assets;
+
+use std::path::{Path, PathBuf};
 
 use glam::Vec3;
 use glint::Renderer;
+use glint::scene::format::SceneFile;
 use glint::scene::parse_scene;
+use tempfile::TempDir;
 
-/// Loads RON scene text (relative paths resolve against `tests/`).
+/// Where inline scene text is taken to live: its relative paths resolve against `tests/`.
+pub fn scene_path() -> PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/inline.ron")
+}
+
+/// Parses RON scene text.
+pub fn parse(ron: &str) -> SceneFile {
+    parse_scene(ron, &scene_path()).expect("scene parses")
+}
+
+/// Loads a parsed scene.
+pub fn load_file(file: &SceneFile) -> Renderer {
+    Renderer::from_scene(file, &scene_path()).expect("scene is valid")
+}
+
+/// Loads RON scene text.
 pub fn load(ron: &str) -> Renderer {
-    let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/inline.ron");
-    let file = parse_scene(ron, &path).expect("scene parses");
-    Renderer::from_scene(&file, &path).expect("scene is valid")
+    load_file(&parse(ron))
+}
+
+/// Fully renders a loaded scene.
+pub fn render_loaded(mut r: Renderer) -> Renderer {
+    r.render(None, &mut |_| {}).expect("render succeeds");
+    r
 }
 
 /// Loads and fully renders RON scene text.
 pub fn render(ron: &str) -> Renderer {
-    let mut r = load(ron);
-    r.render(None, &mut |_| {}).expect("render succeeds");
-    r
+    render_loaded(load(ron))
+}
+
+/// Loads and fully renders a parsed scene.
+pub fn render_file(file: &SceneFile) -> Renderer {
+    render_loaded(load_file(file))
+}
+
+/// A fresh folder in the system temporary directory, removed with everything in it
+/// when dropped (also when the test fails).
+pub fn temp_dir() -> TempDir {
+    tempfile::Builder::new()
+        .prefix("glint-test-")
+        .tempdir()
+        .expect("a temporary folder")
+}
+
+/// A fresh temporary folder holding `scene.ron` with `text`.
+pub fn scene_dir(text: &str) -> TempDir {
+    let dir = temp_dir();
+    std::fs::write(dir.path().join("scene.ron"), text).expect("scene.ron is written");
+    dir
+}
+
+/// A red sphere on a white floor under a square area light, `size` pixels square:
+/// smooth silhouettes against a grey background and soft shadows. `settings` is
+/// spliced into the scene's settings.
+pub fn sphere_under_area_light(size: u32, settings: &str) -> String {
+    format!(
+        r#"(
+    camera: (position: (0.0, 1.5, 4.0), look_at: (0.0, 0.5, 0.0), fov_y: 40.0, width: {size}, height: {size}),
+    settings: (shading_model: lambertian, background: (0.3, 0.3, 0.3), {settings}),
+    materials: {{ "white": (kd: (0.8, 0.8, 0.8)), "red": (kd: (0.8, 0.2, 0.2)) }},
+    entities: [
+        Mesh((material: Some("white"), geometry: Parallelogram(origin: (-3.0, 0.0, 3.0),
+            edge_u: (6.0, 0.0, 0.0), edge_v: (0.0, 0.0, -6.0)))),
+        Sphere((center: (0.0, 0.6, 0.0), radius: 0.5, material: "red")),
+        ParallelogramLight((v0: (-0.5, 2.5, -0.5), edge01: (1.0, 0.0, 0.0), edge02: (0.0, 0.0, 1.0))),
+    ],
+)"#
+    )
 }
 
 /// The error message of a scene that must not load.
