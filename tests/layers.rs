@@ -402,7 +402,6 @@ fn debug_only_observes() {
 }
 
 #[test]
-#[ignore = "enabled when the layering work merges"]
 fn scene_does_not_use_render() {
     assert_none(
         "src/scene must not use render",
@@ -410,7 +409,6 @@ fn scene_does_not_use_render() {
     );
 }
 
-#[test]
 #[ignore = "enabled when the layering work merges"]
 fn scene_does_not_use_shade() {
     assert_none(

@@ -78,7 +78,7 @@ fn analyse_scene_plans_the_stages_a_scene_needs() {
     let glass = world
         .spawn(Material {
             ks: Vec3::splat(0.5),
-            transparency: 0.5,
+            alpha: 0.5,
             ..Material::default()
         })
         .id();
@@ -109,7 +109,7 @@ fn gather_materials_indexes_every_material_entity() {
             kd: Vec3::new(0.1, 0.2, 0.3),
             ks: Vec3::splat(0.5),
             shininess: 8.0,
-            transparency: 0.25,
+            alpha: 0.25,
             ..Material::default()
         })
         .id();
