@@ -409,7 +409,7 @@ fn scene_does_not_use_render() {
     );
 }
 
-#[ignore = "enabled when the layering work merges"]
+#[test]
 fn scene_does_not_use_shade() {
     assert_none(
         "src/scene must not use shade",
