@@ -256,12 +256,10 @@ mod tests {
 
     #[test]
     fn unknown_extension_is_an_error_and_writes_nothing() {
-        let dir = std::env::temp_dir().join(format!("glint-film-{}", std::process::id()));
-        std::fs::create_dir_all(&dir).unwrap();
-        let path = dir.join("out.bmpx");
+        let dir = tempfile::tempdir().unwrap();
+        let path = dir.path().join("out.bmpx");
         assert!(write_image(&path, 1, 1, &[Vec3::ONE], Encoding::Linear).is_err());
         assert!(!path.exists());
-        std::fs::remove_dir_all(&dir).unwrap();
     }
 
     #[test]
