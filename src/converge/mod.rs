@@ -138,36 +138,6 @@ pub struct ConvergeReport {
     pub warnings: Vec<String>,
 }
 
-impl std::fmt::Display for ConvergeReport {
-    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
-        let slope = |s: Option<f64>| s.map_or_else(|| "n/a".into(), |s| format!("{s:+.2}"));
-        writeln!(
-            f,
-            "{:<44} {:>6} {:>6} {:>8} {:>10} {:>10} {:>10} {:>10}",
-            "configuration", "passes", "spp", "seconds", "RMSE", "relMSE", "slope/s", "slope/spp"
-        )?;
-        for c in &self.curves {
-            let Some(last) = c.passes.last() else {
-                writeln!(f, "{:<44} no complete pass", c.label())?;
-                continue;
-            };
-            writeln!(
-                f,
-                "{:<44} {:>6} {:>6} {:>8.2} {:>10.3e} {:>10.3e} {:>10} {:>10}",
-                c.label(),
-                c.passes.len(),
-                last.spp,
-                last.seconds,
-                last.error.rmse,
-                last.error.rel_mse,
-                slope(c.slope_time()),
-                slope(c.slope_spp())
-            )?;
-        }
-        Ok(())
-    }
-}
-
 /// The configurations: the cross product of the compared values, in flag order
 /// (the last flag varies fastest). No flag gives one empty configuration.
 pub fn configurations(compare: &[(String, Vec<String>)]) -> Vec<Vec<(String, String)>> {
