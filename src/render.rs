@@ -42,9 +42,7 @@ impl Overrides {
             file.settings.seed = seed;
         }
         for (k, v) in &self.set {
-            file.settings
-                .set(k, v)
-                .map_err(|e| GlintError::Usage(format!("--set {e}")))?;
+            file.settings.set(k, v).map_err(GlintError::Setting)?;
         }
         Ok(())
     }
@@ -169,9 +167,7 @@ impl Renderer {
             return Ok(());
         }
         self.started.get_or_insert_with(Instant::now);
-        let camera = self
-            .camera()
-            .ok_or_else(|| GlintError::Usage("the scene has no camera".into()))?;
+        let camera = self.camera().ok_or(GlintError::NoCamera)?;
         self.world
             .insert_resource(Film::new(camera.width, camera.height));
         self.prepared = true;

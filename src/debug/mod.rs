@@ -153,15 +153,13 @@ impl DebugSession {
     /// debug entities.
     pub fn trace(scene: &SceneFile, path: &Path, request: DebugRequest) -> Result<Self> {
         let mut renderer = Renderer::from_scene(scene, path)?;
-        let camera = renderer
-            .camera()
-            .ok_or_else(|| GlintError::Usage("the scene has no camera".into()))?;
+        let camera = renderer.camera().ok_or(GlintError::NoCamera)?;
         let [x, y] = request.pixel;
         if x >= camera.width || y >= camera.height {
-            return Err(GlintError::Usage(format!(
-                "--pixel {x},{y} is outside the {}x{} image",
-                camera.width, camera.height
-            )));
+            return Err(GlintError::PixelOutside {
+                pixel: [x, y],
+                size: [camera.width, camera.height],
+            });
         }
         renderer.world.insert_resource(DebugTrace::default());
         renderer.world.insert_resource(request);
@@ -385,10 +383,10 @@ pub struct DebugOutcome {
 pub fn run(scene: &Path, overrides: &Overrides, options: &DebugOptions) -> Result<DebugOutcome> {
     let ext = options.output.extension().and_then(|e| e.to_str());
     if !ext.is_some_and(|e| e.eq_ignore_ascii_case("png")) {
-        return Err(GlintError::Usage(format!(
-            "{}: the debug image must be a .png",
-            options.output.display()
-        )));
+        return Err(GlintError::Output {
+            path: options.output.clone(),
+            message: "the debug image must be a .png".into(),
+        });
     }
     let mut file = read_scene(scene)?;
     overrides.apply(&mut file)?;

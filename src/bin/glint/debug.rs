@@ -1,9 +1,10 @@
 //! `glint debug`: the options from the flags, the notes and the summary line.
 
+use glint::GlintError;
 use glint::debug::DebugOptions;
 
 use crate::cli::DebugCmd;
-use crate::{CliResult, check_settings};
+use crate::{CliError, CliResult, check_settings};
 
 /// Explains one pixel and prints what the library noted and found.
 pub fn run(cmd: &DebugCmd) -> CliResult<()> {
@@ -19,7 +20,13 @@ pub fn run(cmd: &DebugCmd) -> CliResult<()> {
         bvh_level: a.bvh_level,
         dump: a.dump.clone(),
     };
-    let outcome = glint::debug::run(&cmd.scene.scene, &cmd.scene.overrides(), &options)?;
+    let outcome = glint::debug::run(&cmd.scene.scene, &cmd.scene.overrides(), &options).map_err(
+        |e| match e {
+            // The library names the pixel; here it came from the --pixel flag.
+            GlintError::PixelOutside { .. } => CliError::Flag(format!("--{e}")),
+            e => e.into(),
+        },
+    )?;
     for note in &outcome.notes {
         eprintln!("note: {note}");
     }
