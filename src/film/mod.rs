@@ -1,6 +1,7 @@
 //! The film: accumulated radiance per pixel, image output, and error metrics.
 
 pub mod metrics;
+pub mod text;
 
 use std::io::Write;
 use std::path::{Path, PathBuf};
