@@ -45,9 +45,6 @@ pub enum GlintError {
         /// The underlying error.
         source: image::ImageError,
     },
-    /// A `key=value` settings override names no setting or its value does not parse.
-    #[error("{0}")]
-    Setting(String),
     /// An imported asset (glTF, OBJ) could not be loaded.
     #[error("{path}: {source}")]
     Asset {
@@ -56,9 +53,37 @@ pub enum GlintError {
         /// What went wrong.
         source: AssetError,
     },
-    /// A command-line value is not acceptable.
+    /// An output path glint cannot write as asked (unknown format, wrong extension).
+    #[error("{path}: {message}")]
+    Output {
+        /// The output file.
+        path: PathBuf,
+        /// What is wrong with it.
+        message: String,
+    },
+    /// A setting override (`key=value`) names no setting or its value does not parse.
     #[error("{0}")]
-    Usage(String),
+    Setting(String),
+    /// The scene has no camera to render from.
+    #[error("the scene has no camera")]
+    NoCamera,
+    /// A pixel to debug lies outside the image.
+    #[error("pixel {},{} is outside the {}x{} image", .pixel[0], .pixel[1], .size[0], .size[1])]
+    PixelOutside {
+        /// The pixel `[x, y]`.
+        pixel: [u32; 2],
+        /// The image `[width, height]`.
+        size: [u32; 2],
+    },
+    /// The reference image of a converge run cannot be used.
+    #[error("{0}")]
+    Reference(String),
+    /// Options of a run are out of range or missing.
+    #[error("{0}")]
+    Options(String),
+    /// The debug dump could not be encoded as RON.
+    #[error("debug dump: {0}")]
+    Dump(String),
 }
 
 /// Shorthand for results with [`GlintError`].

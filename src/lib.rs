@@ -19,7 +19,6 @@ pub mod scene;
 pub mod schedule;
 pub mod shade;
 pub mod stats;
-pub mod stress;
 pub mod test_util;
 pub mod trace;
 

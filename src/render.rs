@@ -148,9 +148,7 @@ impl Renderer {
             return Ok(());
         }
         self.started.get_or_insert_with(Instant::now);
-        let camera = self
-            .camera()
-            .ok_or_else(|| GlintError::Usage("the scene has no camera".into()))?;
+        let camera = self.camera().ok_or(GlintError::NoCamera)?;
         self.world
             .insert_resource(Film::new(camera.width, camera.height));
         self.prepared = true;

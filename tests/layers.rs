@@ -418,7 +418,6 @@ fn scene_does_not_use_shade() {
 }
 
 #[test]
-#[ignore = "enabled when the layering work merges"]
 fn library_does_not_use_clap() {
     assert_none(
         "clap belongs to the binary (src/main.rs, src/bin/)",
@@ -427,7 +426,6 @@ fn library_does_not_use_clap() {
 }
 
 #[test]
-#[ignore = "enabled when the layering work merges"]
 fn library_does_not_print() {
     assert_none(
         "terminal output belongs to the binary (src/main.rs, src/bin/)",

@@ -138,36 +138,6 @@ pub struct ConvergeReport {
     pub warnings: Vec<String>,
 }
 
-impl std::fmt::Display for ConvergeReport {
-    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
-        let slope = |s: Option<f64>| s.map_or_else(|| "n/a".into(), |s| format!("{s:+.2}"));
-        writeln!(
-            f,
-            "{:<44} {:>6} {:>6} {:>8} {:>10} {:>10} {:>10} {:>10}",
-            "configuration", "passes", "spp", "seconds", "RMSE", "relMSE", "slope/s", "slope/spp"
-        )?;
-        for c in &self.curves {
-            let Some(last) = c.passes.last() else {
-                writeln!(f, "{:<44} no complete pass", c.label())?;
-                continue;
-            };
-            writeln!(
-                f,
-                "{:<44} {:>6} {:>6} {:>8.2} {:>10.3e} {:>10.3e} {:>10} {:>10}",
-                c.label(),
-                c.passes.len(),
-                last.spp,
-                last.seconds,
-                last.error.rmse,
-                last.error.rel_mse,
-                slope(c.slope_time()),
-                slope(c.slope_spp())
-            )?;
-        }
-        Ok(())
-    }
-}
-
 /// The configurations: the cross product of the compared values, in flag order
 /// (the last flag varies fastest). No flag gives one empty configuration.
 pub fn configurations(compare: &[(String, Vec<String>)]) -> Vec<Vec<(String, String)>> {
@@ -222,9 +192,7 @@ fn configured_scene(
     let mut file = parse_scene(scene_text, &options.scene)?;
     options.overrides.apply(&mut file)?;
     for (k, v) in settings {
-        file.settings
-            .set(k, v)
-            .map_err(|e| GlintError::Usage(format!("--compare {e}")))?;
+        file.settings.set(k, v).map_err(GlintError::Setting)?;
     }
     Ok(file)
 }
@@ -242,11 +210,9 @@ fn run_configuration(
     if let Some(flag) = &options.interrupt {
         renderer.set_interrupt(flag.clone());
     }
-    let camera = renderer
-        .camera()
-        .ok_or_else(|| GlintError::Usage("the scene has no camera".into()))?;
+    let camera = renderer.camera().ok_or(GlintError::NoCamera)?;
     if (camera.width, camera.height) != (reference.width, reference.height) {
-        return Err(GlintError::Usage(format!(
+        return Err(GlintError::Reference(format!(
             "the reference is {}x{} but the render is {}x{}",
             reference.width, reference.height, camera.width, camera.height
         )));
@@ -319,16 +285,20 @@ fn run_configuration(
 /// Runs every configuration, writes the CSV and plot if asked, and reports.
 pub fn run(options: &ConvergeOptions, log: &mut dyn FnMut(&str)) -> Result<ConvergeReport> {
     if options.time.is_none() && options.max_spp.is_none() {
-        return Err(GlintError::Usage(
-            "converge needs a budget: --time or --max-spp".into(),
+        return Err(GlintError::Options(
+            "converge needs a budget: a time or a number of samples per pixel".into(),
         ));
     }
     if options.max_spp == Some(0) {
-        return Err(GlintError::Usage("--max-spp must be at least 1".into()));
+        return Err(GlintError::Options(
+            "the samples per pixel budget must be at least 1".into(),
+        ));
     }
     for (key, values) in &options.compare {
         if values.is_empty() {
-            return Err(GlintError::Usage(format!("--compare {key}: no values")));
+            return Err(GlintError::Options(format!(
+                "no values to compare for {key}"
+            )));
         }
     }
     if let Some(path) = &options.plot {
@@ -399,10 +369,10 @@ fn check_png(path: &Path) -> Result<()> {
     if ext.is_some_and(|e| e.eq_ignore_ascii_case("png")) {
         Ok(())
     } else {
-        Err(GlintError::Usage(format!(
-            "{}: the plot is a PNG (use a .png name)",
-            path.display()
-        )))
+        Err(GlintError::Output {
+            path: path.to_owned(),
+            message: "the plot is a PNG (use a .png name)".into(),
+        })
     }
 }
 

@@ -1,14 +1,14 @@
 //! The convergence plot: RMSE against seconds and against spp on log-log axes, drawn
-//! with `image` and the public-domain 8x8 bitmap font of `font8x8`, so that it needs
-//! no system font and no plotting backend.
+//! with `image` and the 8x8 bitmap font of [`crate::film::text`], so that it needs no
+//! system font and no plotting backend.
 
 use std::path::Path;
 
-use font8x8::{BASIC_FONTS, UnicodeFonts};
 use image::{Rgb, RgbImage};
 
 use super::Curve;
 use crate::error::{GlintError, Result};
+use crate::film::text::for_each_dot;
 use crate::film::write_atomically;
 
 /// Canvas width in pixels.
@@ -76,36 +76,22 @@ fn line(img: &mut RgbImage, a: (f64, f64), b: (f64, f64), width: i32, c: Rgb<u8>
 
 /// Text with its top-left corner at (x, y), left to right.
 fn text(img: &mut RgbImage, x: i32, y: i32, s: &str, c: Rgb<u8>) {
-    for (i, ch) in s.chars().enumerate() {
-        let glyph = BASIC_FONTS.get(ch).unwrap_or([0; 8]);
-        for (row, bits) in glyph.iter().enumerate() {
-            for col in 0..8 {
-                if bits & (1 << col) != 0 {
-                    let px = x + i as i32 * GLYPH + col * SCALE as i32;
-                    let py = y + row as i32 * SCALE as i32;
-                    fill_rect(img, px, py, px + SCALE as i32, py + SCALE as i32, c);
-                }
-            }
-        }
-    }
+    let scale = SCALE as i32;
+    for_each_dot(s, |fx, fy| {
+        let (px, py) = (x + fx * scale, y + fy * scale);
+        fill_rect(img, px, py, px + scale, py + scale, c);
+    });
 }
 
 /// Text rotated a quarter turn counter-clockwise (read bottom to top), starting at
 /// the bottom-left corner (x, y).
 fn text_up(img: &mut RgbImage, x: i32, y: i32, s: &str, c: Rgb<u8>) {
-    for (i, ch) in s.chars().enumerate() {
-        let glyph = BASIC_FONTS.get(ch).unwrap_or([0; 8]);
-        for (row, bits) in glyph.iter().enumerate() {
-            for col in 0..8 {
-                if bits & (1 << col) != 0 {
-                    // Glyph (col, row) goes to (row, -col) along the upward baseline.
-                    let px = x + row as i32 * SCALE as i32;
-                    let py = y - i as i32 * GLYPH - (col + 1) * SCALE as i32;
-                    fill_rect(img, px, py, px + SCALE as i32, py + SCALE as i32, c);
-                }
-            }
-        }
-    }
+    let scale = SCALE as i32;
+    for_each_dot(s, |fx, fy| {
+        // Font pixel (fx, fy) goes to (fy, -fx) along the upward baseline.
+        let (px, py) = (x + fy * scale, y - (fx + 1) * scale);
+        fill_rect(img, px, py, px + scale, py + scale, c);
+    });
 }
 
 fn text_width(s: &str) -> i32 {

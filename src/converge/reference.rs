@@ -138,7 +138,7 @@ pub fn cached_reference(
     ));
     let summary = renderer.render(None, &mut |_| {})?;
     if summary.interrupted {
-        return Err(GlintError::Usage(
+        return Err(GlintError::Reference(
             "interrupted while rendering the reference; nothing cached".into(),
         ));
     }

@@ -45,6 +45,5 @@ pub fn to_ron(request: &DebugRequest, color: Vec3, prims: &[DebugPrimitive]) -> 
     let config = ron::ser::PrettyConfig::new()
         .depth_limit(4)
         .extensions(ron::extensions::Extensions::IMPLICIT_SOME);
-    ron::ser::to_string_pretty(&dump, config)
-        .map_err(|e| GlintError::Usage(format!("debug dump: {e}")))
+    ron::ser::to_string_pretty(&dump, config).map_err(|e| GlintError::Dump(e.to_string()))
 }

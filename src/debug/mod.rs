@@ -153,15 +153,13 @@ impl DebugSession {
     /// debug entities.
     pub fn trace(scene: &SceneFile, path: &Path, request: DebugRequest) -> Result<Self> {
         let mut renderer = Renderer::from_scene(scene, path)?;
-        let camera = renderer
-            .camera()
-            .ok_or_else(|| GlintError::Usage("the scene has no camera".into()))?;
+        let camera = renderer.camera().ok_or(GlintError::NoCamera)?;
         let [x, y] = request.pixel;
         if x >= camera.width || y >= camera.height {
-            return Err(GlintError::Usage(format!(
-                "--pixel {x},{y} is outside the {}x{} image",
-                camera.width, camera.height
-            )));
+            return Err(GlintError::PixelOutside {
+                pixel: [x, y],
+                size: [camera.width, camera.height],
+            });
         }
         renderer.world.insert_resource(DebugTrace::default());
         renderer.world.insert_resource(request);
@@ -349,126 +347,79 @@ impl DebugSession {
     }
 }
 
-/// Options of `glint debug` beyond the scene's.
-#[derive(clap::Args, Debug, Clone)]
-pub struct DebugArgs {
-    /// The pixel to explain, `X,Y` (row 0 at the top).
-    #[arg(long, value_parser = parse_pixel)]
+/// What `glint debug` produces beyond tracing the pixel.
+#[derive(Clone, Debug)]
+pub struct DebugOptions {
+    /// The pixel to explain, `[x, y]` (row 0 at the top).
     pub pixel: [u32; 2],
     /// Output image (PNG).
-    #[arg(short, long, default_value = "debug.png")]
     pub output: PathBuf,
-    /// Features to explain, comma separated: reflections, transparency, bvh, textures,
-    /// lights, samples (default: all that are on in the scene).
-    #[arg(long, value_delimiter = ',', value_parser = parse_feature)]
+    /// Features to explain (`None`: all that are on in the scene).
     pub features: Option<Vec<Feature>>,
-    /// View the scene from this point, `X,Y,Z` (default: an oblique viewpoint framing the scene and the path).
-    #[arg(long, value_parser = parse_vec3, allow_hyphen_values = true)]
+    /// View the scene from this point (`None`: an automatic oblique viewpoint).
     pub view_from: Option<Vec3>,
-    /// Size of the debug image, `WxH`.
-    #[arg(long, default_value = "800x600", value_parser = parse_size)]
+    /// Size of the debug image, `[width, height]`.
     pub view_size: [u32; 2],
     /// Fade the parts of primitives that the scene hides from the view.
-    #[arg(long)]
     pub depth_test: bool,
     /// Also show every BVH node at this level, for the whole scene.
-    #[arg(long)]
     pub bvh_level: Option<u32>,
     /// Also write the debug entities as RON to this file.
-    #[arg(long)]
     pub dump: Option<PathBuf>,
 }
 
-fn parse_numbers<T: std::str::FromStr>(
-    s: &str,
-    sep: char,
-    n: usize,
-    what: &str,
-) -> std::result::Result<Vec<T>, String> {
-    let parts: Vec<&str> = s.split(sep).map(str::trim).collect();
-    let values: Option<Vec<T>> = parts.iter().map(|p| p.parse().ok()).collect();
-    match values {
-        Some(v) if v.len() == n => Ok(v),
-        _ => Err(format!("expected {what}, got \"{s}\"")),
-    }
+/// What a debug run wrote and found.
+#[derive(Clone, Debug)]
+pub struct DebugOutcome {
+    /// Notes for the user (features asked for that are off in this scene).
+    pub notes: Vec<String>,
+    /// The pixel's colour (the film's mean of its samples).
+    pub pixel_color: Vec3,
+    /// How many debug entities the run spawned.
+    pub entities: usize,
 }
 
-fn parse_pixel(s: &str) -> std::result::Result<[u32; 2], String> {
-    let v = parse_numbers::<u32>(s, ',', 2, "X,Y")?;
-    Ok([v[0], v[1]])
-}
-
-fn parse_size(s: &str) -> std::result::Result<[u32; 2], String> {
-    let v = parse_numbers::<u32>(&s.to_ascii_lowercase(), 'x', 2, "WxH")?;
-    if v[0] == 0 || v[1] == 0 || v[0] > 8192 || v[1] > 8192 {
-        return Err(format!("the view size must be within 1..8192, got \"{s}\""));
-    }
-    Ok([v[0], v[1]])
-}
-
-fn parse_vec3(s: &str) -> std::result::Result<Vec3, String> {
-    let v = parse_numbers::<f32>(s, ',', 3, "X,Y,Z")?;
-    let p = Vec3::new(v[0], v[1], v[2]);
-    if !p.is_finite() {
-        return Err(format!("expected finite numbers, got \"{s}\""));
-    }
-    Ok(p)
-}
-
-fn parse_feature(s: &str) -> std::result::Result<Feature, String> {
-    Feature::parse(s).ok_or_else(|| {
-        let names: Vec<&str> = Feature::ALL.iter().map(|f| f.name()).collect();
-        format!("unknown feature \"{s}\" (known: {})", names.join(", "))
-    })
-}
-
-/// `glint debug`: traces one pixel, writes the debug image and optionally the dump.
-pub fn run(scene: &Path, overrides: &Overrides, args: &DebugArgs) -> Result<()> {
-    let ext = args.output.extension().and_then(|e| e.to_str());
+/// Traces one pixel, writes the debug image and optionally the dump.
+pub fn run(scene: &Path, overrides: &Overrides, options: &DebugOptions) -> Result<DebugOutcome> {
+    let ext = options.output.extension().and_then(|e| e.to_str());
     if !ext.is_some_and(|e| e.eq_ignore_ascii_case("png")) {
-        return Err(GlintError::Usage(format!(
-            "{}: the debug image must be a .png",
-            args.output.display()
-        )));
+        return Err(GlintError::Output {
+            path: options.output.clone(),
+            message: "the debug image must be a .png".into(),
+        });
     }
     let mut file = read_scene(scene)?;
     overrides.apply(&mut file)?;
     let request = DebugRequest {
-        pixel: args.pixel,
-        features: match &args.features {
+        pixel: options.pixel,
+        features: match &options.features {
             Some(f) => f.iter().copied().collect(),
             None => Feature::ALL.into_iter().collect(),
         },
-        bvh_level: args.bvh_level,
+        bvh_level: options.bvh_level,
     };
     let mut session = DebugSession::trace(&file, scene, request)?;
-    if args.features.is_some() {
+    let mut notes = Vec::new();
+    if options.features.is_some() {
         for f in session.features_off() {
-            eprintln!(
-                "note: {} is off in this scene; nothing to show for it",
+            notes.push(format!(
+                "{} is off in this scene; nothing to show for it",
                 f.name()
-            );
+            ));
         }
     }
-    let [w, h] = args.view_size;
-    let view = session.view(args.view_from, w, h);
+    let [w, h] = options.view_size;
+    let view = session.view(options.view_from, w, h);
     let background = session.background(&view)?;
-    let canvas = session.draw(&view, background, args.depth_test);
-    write_image(&args.output, w, h, &canvas.pixels, Encoding::Linear)?;
-    if let Some(path) = &args.dump {
+    let canvas = session.draw(&view, background, options.depth_test);
+    write_image(&options.output, w, h, &canvas.pixels, Encoding::Linear)?;
+    if let Some(path) = &options.dump {
         let text = session.dump_ron()?;
         crate::film::write_atomically(path, text.as_bytes())?;
     }
-    let c = session.pixel_color();
-    eprintln!(
-        "{}: pixel {},{} = ({:.4}, {:.4}, {:.4}), {} debug entities",
-        args.output.display(),
-        args.pixel[0],
-        args.pixel[1],
-        c.x,
-        c.y,
-        c.z,
-        session.primitives().len()
-    );
-    Ok(())
+    Ok(DebugOutcome {
+        notes,
+        pixel_color: session.pixel_color(),
+        entities: session.primitives().len(),
+    })
 }

@@ -1,11 +1,12 @@
 //! The overlay rasteriser: draws debug primitives over a background image through the
 //! view camera, with 2D insets for panels, a legend and a caption. Text uses the
-//! public-domain 8x8 bitmap font of the `font8x8` crate, so no system fonts are needed.
+//! 8x8 bitmap font of [`crate::film::text`], so no system fonts are needed.
 
 use glam::{Vec2, Vec3};
 
 use super::primitives::{DebugPrimitive, Shape};
 use super::view::ViewCamera;
+use crate::film::text::for_each_dot;
 use crate::shade::texture::Texture;
 
 /// Side of a panel inset in pixels.
@@ -121,30 +122,9 @@ impl Canvas {
 
     /// Text in the 8x8 font at `(x, y)` (top-left), `scale` pixels per font pixel.
     pub fn text(&mut self, x: i32, y: i32, text: &str, color: Vec3, scale: i32) {
-        let mut cx = x;
-        for ch in text.chars() {
-            let code = ch as usize;
-            let glyph = if code < 128 {
-                font8x8::legacy::BASIC_LEGACY[code]
-            } else {
-                font8x8::legacy::BASIC_LEGACY[b'?' as usize]
-            };
-            for (row, bits) in glyph.iter().enumerate() {
-                for col in 0..8 {
-                    if bits & (1 << col) != 0 {
-                        self.fill_rect(
-                            cx + col * scale,
-                            y + row as i32 * scale,
-                            scale,
-                            scale,
-                            color,
-                            1.0,
-                        );
-                    }
-                }
-            }
-            cx += 8 * scale;
-        }
+        for_each_dot(text, |fx, fy| {
+            self.fill_rect(x + fx * scale, y + fy * scale, scale, scale, color, 1.0);
+        });
     }
 
     /// Text on a dark backing box, for legibility over any background.

@@ -1,6 +1,7 @@
 //! The film: accumulated radiance per pixel, image output, and error metrics.
 
 pub mod metrics;
+pub mod text;
 
 use std::io::Write;
 use std::path::{Path, PathBuf};
@@ -139,10 +140,10 @@ pub fn write_image(
         Some("png") => image::ImageFormat::Png,
         Some("exr") => image::ImageFormat::OpenExr,
         _ => {
-            return Err(GlintError::Usage(format!(
-                "{}: unknown output format (use .png or .exr)",
-                path.display()
-            )));
+            return Err(GlintError::Output {
+                path: path.to_owned(),
+                message: "unknown output format (use .png or .exr)".into(),
+            });
         }
     };
     let mut bytes = std::io::Cursor::new(Vec::new());
@@ -161,10 +162,10 @@ pub fn write_image(
             });
         }
         None => {
-            return Err(GlintError::Usage(format!(
-                "{}: image buffer does not match {width}x{height}",
-                path.display()
-            )));
+            return Err(GlintError::Output {
+                path: path.to_owned(),
+                message: format!("image buffer does not match {width}x{height}"),
+            });
         }
     }
     write_atomically(path, bytes.get_ref())

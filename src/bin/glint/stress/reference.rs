@@ -12,7 +12,7 @@
 use glam::{DVec3, Vec3};
 
 use super::Rendered;
-use crate::scene::Camera;
+use glint::scene::Camera;
 
 /// A reference primitive (two-sided).
 #[derive(Clone, Copy, Debug)]

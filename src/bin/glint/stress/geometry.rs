@@ -5,13 +5,13 @@ use glam::{Affine3A, DVec3, Quat, Vec2, Vec3};
 use rayon::prelude::*;
 
 use super::{Budget, Row, render, v3};
-use crate::accel::{Aabb, Bvh, Ray, SplitMethod};
-use crate::render::Renderer;
-use crate::scene::components::MeshData;
-use crate::scene::{Sphere, parse_scene, shapes};
-pub use crate::test_util::Lcg;
-use crate::trace::geometry::{Hit, SceneGeometry};
-use crate::trace::surface::surface_at;
+use glint::accel::{Aabb, Bvh, Ray, SplitMethod};
+use glint::render::Renderer;
+use glint::scene::components::MeshData;
+use glint::scene::{Sphere, parse_scene, shapes};
+pub use glint::test_util::Lcg;
+use glint::trace::geometry::{Hit, SceneGeometry};
+use glint::trace::surface::surface_at;
 
 /// World-space triangles of `mesh` under `m`.
 fn place(mesh: &MeshData, m: Affine3A) -> Vec<[Vec3; 3]> {
@@ -55,7 +55,7 @@ pub fn geometry_of(
 
 /// A closed cone whose side and base are fans of `n` thin triangles around one vertex.
 fn cone(n: u32) -> MeshData {
-    use crate::scene::components::Vertex;
+    use glint::scene::components::Vertex;
     let vertex = |p: Vec3| Vertex {
         position: p,
         normal: Vec3::Y,

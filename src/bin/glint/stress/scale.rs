@@ -9,7 +9,7 @@ use glam::Vec3;
 
 use super::reference::{Prim, RefScene};
 use super::{Budget, Rendered, Row, render_ron, v3};
-use crate::scene::Camera;
+use glint::scene::Camera;
 
 /// Where the unit scene is put: `world = scale * p + offset`.
 #[derive(Clone, Copy, Debug)]

@@ -8,23 +8,32 @@
 //! [`Budget::full`] (millions of rays). See `docs/stress.md` for the table and for how
 //! each failure mode is prevented.
 //!
-//! [`SceneGeometry`]: crate::trace::geometry::SceneGeometry
+//! [`SceneGeometry`]: glint::trace::geometry::SceneGeometry
 
 use std::fmt::Write as _;
 use std::path::Path;
 
 use glam::Vec3;
 
-use crate::error::{GlintError, Result};
-use crate::film::Film;
-use crate::render::Renderer;
-use crate::scene::parse_scene;
-use crate::stats::RenderStats;
+use glint::Result;
+use glint::film::Film;
+use glint::render::Renderer;
+use glint::scene::parse_scene;
+use glint::stats::RenderStats;
 
+use crate::cli::StressArgs;
+use crate::{CliError, CliResult, set_threads};
+
+mod coincident;
+mod deep_chains;
 mod geometry;
-pub mod reference;
-mod render_cases;
+mod lights;
+mod reference;
 mod scale;
+mod scenes;
+mod spheres;
+mod textures;
+mod validation;
 
 /// One measurement of a case.
 #[derive(Clone, Debug, PartialEq)]
@@ -127,8 +136,6 @@ impl Budget {
 pub struct Case {
     /// Short name, also the `--case` filter and the test name.
     pub name: &'static str,
-    /// What the case stresses.
-    pub about: &'static str,
     /// Builds, renders or traces, and measures.
     pub run: fn(&Budget) -> Vec<Row>,
 }
@@ -136,60 +143,60 @@ pub struct Case {
 /// Every case, in the order of issue 6.
 pub fn cases() -> Vec<Case> {
     vec![
+        // One lit scene scaled by 1e-4 .. 1e6.
         Case {
             name: "scale",
-            about: "one lit scene scaled by 1e-4 .. 1e6",
             run: scale::scale,
         },
+        // The same scene translated by 1e3 .. 1e6.
         Case {
             name: "far",
-            about: "the same scene translated by 1e3 .. 1e6",
             run: scale::far,
         },
+        // Rays at shared edges and vertices of closed meshes and a fan.
         Case {
             name: "watertight",
-            about: "rays at shared edges and vertices of closed meshes and a fan",
             run: geometry::watertight,
         },
+        // Axis-aligned and grazing rays, BVH against brute force.
         Case {
             name: "axis_grazing",
-            about: "axis-aligned and grazing rays, BVH against brute force",
             run: geometry::axis_grazing,
         },
+        // Zero-area, collinear, duplicate-vertex and needle triangles.
         Case {
             name: "degenerate",
-            about: "zero-area, collinear, duplicate-vertex and needle triangles",
             run: geometry::degenerate,
         },
+        // Surfaces 1e-3, 1e-5 and 0 apart, a surface at a light.
         Case {
             name: "coincident",
-            about: "surfaces 1e-3, 1e-5 and 0 apart, a surface at a light",
-            run: render_cases::coincident,
+            run: coincident::coincident,
         },
+        // 100 stacked transparent quads, facing mirrors to depth 64.
         Case {
             name: "deep_chains",
-            about: "100 stacked transparent quads, facing mirrors to depth 64",
-            run: render_cases::deep_chains,
+            run: deep_chains::deep_chains,
         },
+        // Radius 1e-6 and 1e6, camera inside, tangent rays.
         Case {
             name: "spheres",
-            about: "radius 1e-6 and 1e6, camera inside, tangent rays",
-            run: render_cases::spheres,
+            run: spheres::spheres,
         },
+        // Degenerate area lights, colour 1e6, light inside geometry, 1..4096 samples.
         Case {
             name: "lights",
-            about: "degenerate area lights, colour 1e6, light inside geometry, 1..4096 samples",
-            run: render_cases::lights,
+            run: lights::lights,
         },
+        // 1x1 and 4096x1 textures, texture coordinates of +-1e6.
         Case {
             name: "textures",
-            about: "1x1 and 4096x1 textures, texture coordinates of +-1e6",
-            run: render_cases::textures,
+            run: textures::textures,
         },
+        // Every non-finite or out-of-range input is rejected at load.
         Case {
             name: "validation",
-            about: "every non-finite or out-of-range input is rejected at load",
-            run: render_cases::validation,
+            run: validation::validation,
         },
     ]
 }
@@ -256,21 +263,23 @@ pub fn csv(rows: &[Row]) -> String {
     s
 }
 
-/// The `glint stress` command: runs the cases whose name contains `only` (all when
-/// `None`), prints the table, writes `csv_path`; returns whether every row passed.
-pub fn run(quick: bool, csv_path: Option<&Path>, only: Option<&str>) -> Result<bool> {
-    let budget = if quick {
+/// The `glint stress` command: runs the cases whose name contains `--case` (all when
+/// absent), prints the table, writes the CSV; fails when any row fails.
+pub fn run(args: &StressArgs) -> CliResult<()> {
+    set_threads(args.threads)?;
+    let budget = if args.quick {
         Budget::quick()
     } else {
         Budget::full()
     };
+    let only = args.case.as_deref();
     let selected: Vec<Case> = cases()
         .into_iter()
         .filter(|c| only.is_none_or(|o| c.name.contains(o)))
         .collect();
     if selected.is_empty() {
         let names: Vec<&str> = cases().iter().map(|c| c.name).collect();
-        return Err(GlintError::Usage(format!(
+        return Err(CliError::Flag(format!(
             "--case {}: no such case (cases: {})",
             only.unwrap_or_default(),
             names.join(", ")
@@ -294,10 +303,16 @@ pub fn run(quick: bool, csv_path: Option<&Path>, only: Option<&str>) -> Result<b
         rows.extend(r);
     }
     print!("{}", table(&rows));
-    if let Some(path) = csv_path {
-        crate::film::write_atomically(path, csv(&rows).as_bytes())?;
+    if let Some(path) = &args.csv {
+        glint::film::write_atomically(path, csv(&rows).as_bytes())?;
     }
-    Ok(rows.iter().all(|r| r.pass))
+    if rows.iter().all(|r| r.pass) {
+        Ok(())
+    } else {
+        Err(CliError::Failed(
+            "some stress cases failed (see the table)".into(),
+        ))
+    }
 }
 
 // ---------------------------------------------------------------------------------------
@@ -382,4 +397,35 @@ pub fn render_ron(text: &str) -> Result<Rendered> {
 /// Formats a vector as a RON tuple with enough digits to round-trip f32.
 pub fn v3(v: Vec3) -> String {
     format!("({:?}, {:?}, {:?})", v.x, v.y, v.z)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn every_case_has_a_test() {
+        let source = include_str!("../../../../tests/stress.rs");
+        for c in cases() {
+            assert!(
+                source.contains(&format!("check(\"{}\")", c.name)),
+                "no test for case {}",
+                c.name
+            );
+        }
+    }
+
+    #[test]
+    fn rows_fail_outside_their_bound_and_on_nan() {
+        assert!(Row::at_most("c", "m", 0.0, 0.0).pass);
+        assert!(!Row::at_most("c", "m", 1.0, 0.0).pass);
+        assert!(!Row::at_most("c", "m", f64::NAN, 0.0).pass);
+        assert!(!Row::exactly("c", "m", 2.0, 3.0).pass);
+        let rows = [Row::at_most("a \"b\"", "m", 1.5, 2.0)];
+        assert_eq!(
+            csv(&rows),
+            "case,measure,value,bound,pass\n\"a \"\"b\"\"\",\"m\",1.5e0,2e0,true\n"
+        );
+        assert!(table(&rows).contains("| a \"b\" | m | 1.500e0 | 2 | pass |"));
+    }
 }

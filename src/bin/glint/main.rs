@@ -1,0 +1,102 @@
+//! The `glint` command line: parses arguments, calls the library, prints, maps errors to
+//! exit codes. Every clap type is in [`cli`]; each command has its own module.
+
+mod cli;
+mod converge;
+mod debug;
+mod render;
+mod stress;
+
+use std::process::ExitCode;
+use std::sync::Arc;
+use std::sync::atomic::{AtomicBool, Ordering};
+
+use clap::Parser;
+use glint::GlintError;
+
+use cli::{Cli, Command};
+
+/// Why the command failed: the library's error, or a flag the binary rejects itself.
+#[derive(Debug, thiserror::Error)]
+pub enum CliError {
+    /// An error of the library.
+    #[error(transparent)]
+    Glint(#[from] GlintError),
+    /// A command-line value that is not acceptable.
+    #[error("{0}")]
+    Flag(String),
+    /// The command ran but its result is a failure (e.g. a failing stress case).
+    #[error("{0}")]
+    Failed(String),
+}
+
+/// Results of the commands.
+pub type CliResult<T> = Result<T, CliError>;
+
+/// Why `main` exits unsuccessfully although nothing failed.
+pub struct Interrupted;
+
+/// Sets the size of rayon's global pool.
+pub fn set_threads(threads: Option<usize>) -> CliResult<()> {
+    if let Some(n) = threads {
+        rayon::ThreadPoolBuilder::new()
+            .num_threads(n.max(1))
+            .build_global()
+            .map_err(|e| CliError::Flag(format!("--threads: {e}")))?;
+    }
+    Ok(())
+}
+
+/// Checks each `KEY=VALUE` of `flag` against the settings before any file is read.
+pub fn check_settings<'a>(
+    flag: &str,
+    pairs: impl IntoIterator<Item = (&'a String, &'a String)>,
+) -> CliResult<()> {
+    for (k, v) in pairs {
+        glint::scene::Settings::default()
+            .set(k, v)
+            .map_err(|e| CliError::Flag(format!("{flag} {e}")))?;
+    }
+    Ok(())
+}
+
+/// A flag set by the first Ctrl-C; a second Ctrl-C exits at once.
+pub fn ctrl_c_flag() -> CliResult<Arc<AtomicBool>> {
+    let flag = Arc::new(AtomicBool::new(false));
+    let handler_flag = flag.clone();
+    ctrlc::set_handler(move || {
+        if handler_flag.swap(true, Ordering::SeqCst) {
+            std::process::exit(130);
+        }
+        eprintln!("\ninterrupted: finishing the region in flight (Ctrl-C again to quit now)");
+    })
+    .map_err(|e| CliError::Failed(format!("cannot install the Ctrl-C handler: {e}")))?;
+    Ok(flag)
+}
+
+fn info(args: &cli::SceneArgs) -> CliResult<()> {
+    check_settings("--set", args.set.iter().map(|(k, v)| (k, v)))?;
+    let mut renderer = glint::Renderer::from_file(&args.scene, &args.overrides())?;
+    print!("{}", glint::info::describe(&mut renderer)?);
+    Ok(())
+}
+
+fn main() -> ExitCode {
+    let cli = Cli::parse();
+    let result = match &cli.command {
+        Command::Render(a) => render::run(a),
+        Command::Info(a) => info(a).map(|()| None),
+        Command::Converge(a) => converge::run(a),
+        Command::Debug(a) => debug::run(a).map(|()| None),
+        Command::Stress(a) => stress::run(a).map(|()| None),
+    };
+    match result {
+        Ok(None) => ExitCode::SUCCESS,
+        // The conventional status of a process stopped by SIGINT.
+        Ok(Some(Interrupted)) => ExitCode::from(130),
+        Err(e) => {
+            eprintln!("error: {e}");
+            ExitCode::FAILURE
+        }
+    }
+}
