@@ -30,6 +30,8 @@ pub struct RenderSummary {
     pub samples: u32,
     /// Wall time of the whole render (prepare and passes).
     pub seconds: f64,
+    /// Wall time of the prepare stage (tables, texture decoding, BVH builds).
+    pub prepare_seconds: f64,
     /// Statistics of the run.
     pub stats: RenderStats,
     /// Choices the loader made (automatic camera, default light), shown after the numbers.
@@ -38,21 +40,35 @@ pub struct RenderSummary {
     pub interrupted: bool,
 }
 
+impl RenderSummary {
+    /// Wall time of the passes alone.
+    pub fn trace_seconds(&self) -> f64 {
+        (self.seconds - self.prepare_seconds).max(0.0)
+    }
+
+    /// Rays traced per second of tracing (the prepare stage excluded), in millions.
+    pub fn mrays_per_second(&self) -> f64 {
+        self.stats.rays.total() as f64 / self.trace_seconds().max(1e-9) / 1e6
+    }
+}
+
 impl std::fmt::Display for RenderSummary {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
         let r = &self.stats.rays;
         write!(
             f,
-            "{}x{}, {} spp, {:.2} s, rays: {} camera, {} shadow, {} reflection, {} pass-through, {:.2} Mrays/s",
+            "{}x{}, {} spp, {:.2} s ({:.2} s prepare, {:.2} s trace), rays: {} camera, {} shadow, {} reflection, {} pass-through, {:.2} Mrays/s",
             self.width,
             self.height,
             self.samples,
             self.seconds,
+            self.prepare_seconds,
+            self.trace_seconds(),
             r.camera,
             r.shadow,
             r.reflection,
             r.pass_through,
-            r.total() as f64 / self.seconds.max(1e-9) / 1e6
+            self.mrays_per_second()
         )?;
         if self.stats.nonfinite_samples > 0 {
             write!(
@@ -74,6 +90,7 @@ pub struct Renderer {
     pub world: World,
     prepared: bool,
     started: Option<Instant>,
+    prepare_time: Duration,
     interrupt: Option<Arc<AtomicBool>>,
 }
 
@@ -113,6 +130,7 @@ impl Renderer {
             world,
             prepared: false,
             started: None,
+            prepare_time: Duration::ZERO,
             interrupt: None,
         }
     }
@@ -147,12 +165,14 @@ impl Renderer {
         if self.prepared {
             return Ok(());
         }
-        self.started.get_or_insert_with(Instant::now);
+        let start = *self.started.get_or_insert_with(Instant::now);
         let camera = self.camera().ok_or(GlintError::NoCamera)?;
         self.world
             .insert_resource(Film::new(camera.width, camera.height));
         self.prepared = true;
-        run_prepare(&mut self.world)
+        let result = run_prepare(&mut self.world);
+        self.prepare_time = start.elapsed();
+        result
     }
 
     /// Stops renders when `flag` is set (e.g. by Ctrl-C): checked before every
@@ -223,6 +243,7 @@ impl Renderer {
             height: film.height,
             samples,
             seconds: elapsed.as_secs_f64(),
+            prepare_seconds: self.prepare_time.as_secs_f64(),
             stats: self.world.resource::<RenderStats>().clone(),
             notes: self
                 .world
@@ -272,5 +293,33 @@ impl PassControl for Control<'_> {
 
     fn another_pass(&mut self) -> bool {
         self.budget.is_none_or(|b| self.start.elapsed() < b)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn mrays_per_second_leaves_out_the_prepare_stage() {
+        let mut stats = RenderStats::default();
+        stats.rays.camera = 3_000_000;
+        let summary = RenderSummary {
+            width: 1,
+            height: 1,
+            samples: 1,
+            seconds: 4.0,
+            prepare_seconds: 1.0,
+            stats,
+            notes: Vec::new(),
+            interrupted: false,
+        };
+        assert_eq!(summary.trace_seconds(), 3.0);
+        assert_eq!(summary.mrays_per_second(), 1.0);
+        let text = summary.to_string();
+        assert!(
+            text.contains("4.00 s (1.00 s prepare, 3.00 s trace)") && text.contains("1.00 Mrays/s"),
+            "{text}"
+        );
     }
 }

@@ -175,6 +175,7 @@ pub fn lights(b: &Budget) -> Vec<Row> {
             height: img.height,
             samples: 1,
             seconds: 1.0,
+            prepare_seconds: 0.0,
             stats: img.stats.clone(),
             notes: Vec::new(),
             interrupted: false,
