@@ -294,6 +294,6 @@ impl PassControl for Control<'_> {
     }
 
     fn another_pass(&mut self) -> bool {
-        !self.budget.is_some_and(|b| self.start.elapsed() >= b)
+        self.budget.is_none_or(|b| self.start.elapsed() < b)
     }
 }
