@@ -12,7 +12,7 @@ use crate::scene::Settings;
 use crate::schedule::{Bounce, BounceSystems, PassSystems, RenderPass};
 use crate::trace::log::TraceLog;
 use crate::trace::plan::RenderPlan;
-use crate::trace::wavefront::{PassRegion, Wavefront, camera_sample_offset};
+use crate::trace::wavefront::{CameraSampleOffsets, PassRegion, Wavefront};
 
 /// Records the region's camera rays with their offsets within the pixel.
 pub fn record_camera_samples(
@@ -22,10 +22,11 @@ pub fn record_camera_samples(
     wf: Res<Wavefront>,
     mut trace: ResMut<DebugTrace>,
 ) {
+    let offsets = CameraSampleOffsets::new(&settings, &plan);
     let offsets: Vec<_> = wf
         .rays
         .iter()
-        .map(|q| camera_sample_offset(&settings, &plan, region.first_pixel + q.slot, region.sample))
+        .map(|q| offsets.of(region.first_pixel + q.slot, region.sample))
         .collect();
     trace.record_camera_samples(region.sample, &wf.rays, &offsets);
 }

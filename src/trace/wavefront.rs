@@ -7,7 +7,7 @@
 //! ray of weight `w * (1 - alpha)`.
 
 use bevy_ecs::prelude::*;
-use glam::Vec3;
+use glam::{Vec2, Vec3};
 use rayon::prelude::*;
 
 use super::camera::CameraBasis;
@@ -18,7 +18,7 @@ use super::plan::RenderPlan;
 use super::surface::{SHADOW_EPSILON, Surface, surface_at};
 use crate::accel::Ray;
 use crate::sampling::{Sampler, pixel_sample_offset, samples_taken};
-use crate::scene::{Camera, Settings};
+use crate::scene::{Camera, PixelSampling, Settings};
 use crate::shade::{Shading, ShadingInput};
 use crate::stats::{RenderStats, Stage};
 use crate::trace::geometry::SceneGeometry;
@@ -149,20 +149,35 @@ pub struct SampleRadiance {
     pub values: Vec<Vec3>,
 }
 
-/// Offset within `pixel` of its camera sample `sample`, in [0, 1)^2: the pixel centre
-/// unless the plan asks for sample patterns.
-pub fn camera_sample_offset(
-    settings: &Settings,
-    plan: &RenderPlan,
-    pixel: u32,
-    sample: u32,
-) -> glam::Vec2 {
-    if plan.pixel_patterns {
+/// Where in its pixel each camera sample goes: the pixel centre unless the plan asks for
+/// sample patterns. The render and the debug recorder both ask it, so they agree.
+#[derive(Clone, Copy, Debug)]
+pub struct CameraSampleOffsets {
+    sampler: Sampler,
+    samples: u32,
+    mode: PixelSampling,
+    patterns: bool,
+}
+
+impl CameraSampleOffsets {
+    /// The offsets the settings and the plan call for.
+    pub fn new(settings: &Settings, plan: &RenderPlan) -> Self {
         let mode = settings.pixel_sampling;
-        let n = samples_taken(settings.pixel_samples, mode);
-        pixel_sample_offset(&Sampler::new(settings.seed), pixel, sample, n, mode)
-    } else {
-        glam::Vec2::splat(0.5)
+        Self {
+            sampler: Sampler::new(settings.seed),
+            samples: samples_taken(settings.pixel_samples, mode),
+            mode,
+            patterns: plan.pixel_patterns,
+        }
+    }
+
+    /// Offset within `pixel` of its camera sample `sample`, in [0, 1)^2.
+    pub fn of(&self, pixel: u32, sample: u32) -> Vec2 {
+        if self.patterns {
+            pixel_sample_offset(&self.sampler, pixel, sample, self.samples, self.mode)
+        } else {
+            Vec2::splat(0.5)
+        }
     }
 }
 
@@ -181,12 +196,13 @@ pub fn generate_camera_samples(
     };
     let width = camera.width;
     let basis = CameraBasis::new(camera);
+    let offsets = CameraSampleOffsets::new(&settings, &plan);
     let rays: Vec<QueuedRay> = (0..region.pixels)
         .into_par_iter()
         .with_min_len(CHUNK)
         .map(|slot| {
             let pixel = region.first_pixel + slot;
-            let offset = camera_sample_offset(&settings, &plan, pixel, region.sample);
+            let offset = offsets.of(pixel, region.sample);
             let (x, y) = ((pixel % width) as f32, (pixel / width) as f32);
             QueuedRay {
                 ray: basis.ray(x + offset.x, y + offset.y),
@@ -211,16 +227,22 @@ fn closest_hits<O: HitObserver>(
     rays: &[QueuedRay],
     interpolate: bool,
 ) -> (Vec<Option<Surface>>, Vec<O>) {
-    rays.par_iter()
+    // One observer slot per ray, filled in place: for `()` the slots take no memory and
+    // the loop is the plain query.
+    let mut observers: Vec<O> = std::iter::repeat_with(O::default)
+        .take(rays.len())
+        .collect();
+    let surfaces = rays
+        .par_iter()
+        .zip(observers.par_iter_mut())
         .with_min_len(CHUNK)
-        .map(|q| {
-            let mut observer = O::default();
-            let hit = geometry.intersect(&q.ray, f32::INFINITY, &mut observer);
+        .map(|(q, observer)| {
+            let hit = geometry.intersect(&q.ray, f32::INFINITY, observer);
             observer.closest(hit.as_ref());
-            let surface = hit.map(|h| surface_at(geometry, &q.ray, &h, interpolate));
-            (surface, observer)
+            hit.map(|h| surface_at(geometry, &q.ray, &h, interpolate))
         })
-        .unzip()
+        .collect();
+    (surfaces, observers)
 }
 
 /// Finds each ray's closest hit and builds its shading point; with a [`TraceLog`], also
@@ -425,8 +447,9 @@ pub fn trace_shadow_rays(
 ) {
     let t_max = 1.0 - SHADOW_EPSILON;
     let transparent = plan.transparent_shadows;
-    let visible: Vec<Vec3> = wf
-        .shadow_rays
+    let wf = &mut *wf;
+    // Into the buffer of the last depth: its allocation is reused, not made anew.
+    wf.shadow_rays
         .par_iter()
         .with_min_len(CHUNK)
         .map(|s| {
@@ -438,12 +461,10 @@ pub fn trace_shadow_rays(
                 s.contribution
             }
         })
-        .collect();
-    let wf = &mut *wf;
-    for (s, c) in wf.shadow_rays.iter().zip(&visible) {
+        .collect_into_vec(&mut wf.shadow_arrived);
+    for (s, c) in wf.shadow_rays.iter().zip(&wf.shadow_arrived) {
         wf.ray_radiance[s.owner as usize] += *c;
     }
-    wf.shadow_arrived = visible;
     stats.record(Stage::TraceShadowRays, wf.shadow_rays.len() as u64);
     stats.rays.shadow += wf.shadow_rays.len() as u64;
 }
