@@ -133,7 +133,7 @@ pub trait LightObserver: Default + Send {
     ) {
     }
     /// Appends a later chunk's samples, whose shadow rays follow the first `shadow_offset`.
-    fn append(&mut self, _later: Self, _shadow_offset: u32) {}
+    fn join(&mut self, _later: Self, _shadow_offset: u32) {}
 }
 
 impl LightObserver for () {}
@@ -147,7 +147,7 @@ impl LightObserver for Vec<LightSampleSeen> {
             shadow_ray,
         });
     }
-    fn append(&mut self, later: Self, shadow_offset: u32) {
+    fn join(&mut self, later: Self, shadow_offset: u32) {
         self.extend(later.into_iter().map(|l| LightSampleSeen {
             shadow_ray: l.shadow_ray.map(|s| s + shadow_offset),
             ..l
@@ -162,4 +162,33 @@ pub struct TraceLog {
     pub rays: Vec<RayTrace>,
     /// Every light sample evaluated, in queue order (written by `shade_hits`).
     pub light_samples: Vec<LightSampleSeen>,
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn seen(ray: u32, shadow_ray: Option<u32>) -> LightSampleSeen {
+        LightSampleSeen {
+            ray,
+            light: LightSample {
+                position: Vec3::ZERO,
+                color: Vec3::ONE,
+                light: 0,
+            },
+            contribution: Vec3::ONE,
+            shadow_ray,
+        }
+    }
+
+    #[test]
+    fn joined_chunks_index_the_joined_shadow_queue() {
+        let mut first = vec![seen(0, Some(0)), seen(0, None), seen(1, Some(1))];
+        let later = vec![seen(2, Some(0)), seen(3, None), seen(3, Some(1))];
+        LightObserver::join(&mut first, later, 2);
+        let shadow: Vec<_> = first.iter().map(|l| l.shadow_ray).collect();
+        assert_eq!(shadow, [Some(0), None, Some(1), Some(2), None, Some(3)]);
+        let rays: Vec<_> = first.iter().map(|l| l.ray).collect();
+        assert_eq!(rays, [0, 0, 1, 2, 3, 3]);
+    }
 }

@@ -380,7 +380,7 @@ fn shade_chunks<O: LightObserver>(
     let mut shadow_rays = Vec::new();
     let mut observed = O::default();
     for (r, s, o) in chunks {
-        observed.append(o, shadow_rays.len() as u32);
+        observed.join(o, shadow_rays.len() as u32);
         radiance.extend(r);
         shadow_rays.extend(s);
     }
