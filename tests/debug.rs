@@ -3,20 +3,26 @@
 
 mod common;
 
+use std::any::TypeId;
 use std::path::Path;
 
+use bevy_ecs::prelude::*;
+use bevy_ecs::schedule::{ScheduleLabel, Schedules};
 use common::{load_file, parse, render_file, scene_path, temp_dir};
 use glam::{Vec2, Vec3};
 use glint::accel::TraversalStats;
 use glint::debug::overlay::{Canvas, OverlayInput, draw_world};
+use glint::debug::record::recorder_types;
 use glint::debug::{
     DebugEmit, DebugPrimitive, DebugRequest, DebugSession, DebugTrace, Feature, Shape, Values,
     ViewCamera, debug_emit_schedule,
 };
 use glint::scene::format::SceneFile;
 use glint::scene::{Camera, read_scene};
+use glint::schedule::{Bounce, Prepare, RenderPass};
+use glint::trace::camera::camera_ray;
 use glint::trace::geometry::SceneGeometry;
-use glint::trace::wavefront::camera_ray;
+use glint::trace::log::TraceLog;
 
 fn debug(file: &SceneFile, request: DebugRequest) -> DebugSession {
     DebugSession::trace(file, &scene_path(), request).unwrap()
@@ -133,6 +139,40 @@ fn debug_colour_equals_rendered_colour() {
             lit += (expected != Vec3::ZERO) as u32;
         }
         assert!(lit >= 2, "{name}: too few lit pixels to compare");
+    }
+}
+
+/// The system types in the render schedules of `world`.
+fn render_system_types(world: &World) -> Vec<TypeId> {
+    let schedules = world.resource::<Schedules>();
+    let mut types = Vec::new();
+    for label in [Prepare.intern(), RenderPass.intern(), Bounce.intern()] {
+        let schedule = schedules.get(label).expect("render schedule");
+        let systems = schedule.systems().expect("schedule ran");
+        types.extend(systems.map(|(_, s)| s.system_type()));
+    }
+    types
+}
+
+#[test]
+fn normal_render_schedules_no_recorder() {
+    let file = parse(BUSY);
+    let r = render_file(&file);
+    let types = render_system_types(&r.world);
+    assert!(types.len() >= 10, "the render schedules ran");
+    for recorder in recorder_types() {
+        assert!(!types.contains(&recorder), "a recorder in a normal render");
+    }
+    assert!(r.world.get_resource::<TraceLog>().is_none());
+
+    // A debug session's render schedules hold every recorder.
+    let s = debug(&file, DebugRequest::all(24, 20));
+    let types = render_system_types(&s.renderer.world);
+    for recorder in recorder_types() {
+        assert!(
+            types.contains(&recorder),
+            "a recorder missing in a debug run"
+        );
     }
 }
 
@@ -483,8 +523,8 @@ fn projection_lands_on_the_expected_pixels() {
 #[test]
 fn segment_crossing_behind_the_view_is_clipped_not_wrapped() {
     let view = test_view();
-    let front = view.camera.position + view.forward * 4.0 + view.right * 0.5;
-    let behind = view.camera.position - view.forward * 4.0 + view.right * 0.5;
+    let front = view.camera.position + view.basis.forward * 4.0 + view.basis.right * 0.5;
+    let behind = view.camera.position - view.basis.forward * 4.0 + view.basis.right * 0.5;
     let ((a, za), (b, zb)) = view
         .project_segment(front, behind)
         .expect("part is in front");
@@ -497,12 +537,13 @@ fn segment_crossing_behind_the_view_is_clipped_not_wrapped() {
     assert!(b.x > a.x && a.x > 60.0, "{a} -> {b}");
     // A naive projection of the point behind the eye lands on the wrong (left) side.
     let v = behind - view.camera.position;
-    let naive_x = v.dot(view.right) / (v.dot(view.forward) * view.tan_half * view.aspect);
+    let naive_x = v.dot(view.basis.right)
+        / (v.dot(view.basis.forward) * view.basis.tan_half * view.basis.aspect);
     assert!(naive_x < 0.0);
     assert!(view.project(behind).is_none());
     // Wholly behind: nothing.
     assert!(
-        view.project_segment(behind, behind - view.forward)
+        view.project_segment(behind, behind - view.basis.forward)
             .is_none()
     );
 

@@ -12,11 +12,11 @@ use glint::scene::Settings;
 use glint::shade::{Shading, ShadingInput};
 use glint::stats::Stage;
 use glint::test_util::Lcg;
+use glint::trace::camera::camera_ray;
 use glint::trace::geometry::{Hit, PrimKind, SceneGeometry};
 use glint::trace::lights::Lights;
 use glint::trace::materials::Materials;
 use glint::trace::surface::{SHADOW_EPSILON, Surface, surface_at};
-use glint::trace::wavefront::camera_ray;
 
 // ---------------------------------------------------------------- recursion
 

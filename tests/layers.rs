@@ -393,7 +393,6 @@ fn accel_is_pure_geometry() {
 }
 
 #[test]
-#[ignore = "enabled when the layering work merges"]
 fn debug_only_observes() {
     assert_none(
         "trace, accel, film, shade and sampling must not use debug",
@@ -439,7 +438,6 @@ fn library_does_not_print() {
 }
 
 #[test]
-#[ignore = "enabled when the layering work merges"]
 fn top_level_modules_form_no_cycle() {
     let files = library();
     let (modules, reexports) = top_level(&files);

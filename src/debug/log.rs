@@ -1,40 +1,19 @@
-//! The trace log: what the render's own tracing systems did for the debugged pixel.
+//! The debug trace: what the render's own tracing systems did for the debugged pixel,
+//! over all its samples and depths.
 //!
-//! The systems of [`crate::trace::wavefront`] write here only when a [`DebugTrace`]
-//! resource exists (an `Option<ResMut<DebugTrace>>` parameter), so a normal render
-//! neither allocates nor records anything. The emitters of [`super::emit`] read it.
+//! The recorders of [`super::record`] fill it from the wavefront and from trace's
+//! [`TraceLog`](crate::trace::log::TraceLog), after the stages they watch; the emitters
+//! of [`super::emit`] read it.
 
 use bevy_ecs::prelude::*;
 use glam::{Vec2, Vec3};
 
-use crate::accel::{Ray, TraversalVisitor};
-use crate::trace::geometry::{GeometryVisitor, Hit, PrimKind};
+use crate::accel::Ray;
+use crate::trace::geometry::Hit;
 use crate::trace::lights::LightSample;
+use crate::trace::log::{LightSampleSeen, RayTrace, TraversalLog};
 use crate::trace::surface::Surface;
-use crate::trace::wavefront::QueuedRay;
-
-/// How a traced ray came to be, read from its branch id in the sample's ray tree.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, serde::Serialize)]
-#[serde(rename_all = "snake_case")]
-pub enum RayKind {
-    /// From the camera (branch 0).
-    Camera,
-    /// A reflection (odd branch ids: 2k + 1).
-    Reflection,
-    /// A pass-through ray (even non-zero branch ids: 2k + 2).
-    PassThrough,
-}
-
-impl RayKind {
-    /// The kind of the ray with branch id `path` (see `QueuedRay::path`).
-    pub fn of_path(path: u32) -> RayKind {
-        match path {
-            0 => RayKind::Camera,
-            p if p % 2 == 1 => RayKind::Reflection,
-            _ => RayKind::PassThrough,
-        }
-    }
-}
+use crate::trace::wavefront::{QueuedRay, RayKind};
 
 /// One camera sample of the pixel.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -45,60 +24,6 @@ pub struct CameraSampleRecord {
     pub offset: Vec2,
     /// The camera ray.
     pub ray: Ray,
-}
-
-/// A BVH node or primitive as a traversal met it.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub struct Visit {
-    /// Which hierarchy (triangles or spheres).
-    pub kind: PrimKind,
-    /// Node index (for nodes) or primitive index (for primitive tests).
-    pub index: u32,
-    /// Depth of the node (root 0); 0 for primitive tests.
-    pub depth: u32,
-}
-
-/// Records a traversal: every node entered and every primitive tested, in order.
-#[derive(Clone, Debug, PartialEq, Eq)]
-pub struct TraversalLog {
-    /// Nodes whose boxes the ray entered.
-    pub nodes: Vec<Visit>,
-    /// Primitives tested.
-    pub prims: Vec<Visit>,
-    current: PrimKind,
-}
-
-impl Default for TraversalLog {
-    fn default() -> Self {
-        Self {
-            nodes: Vec::new(),
-            prims: Vec::new(),
-            current: PrimKind::Triangle,
-        }
-    }
-}
-
-impl TraversalVisitor for TraversalLog {
-    fn visit_node(&mut self, node: u32, depth: u32) {
-        self.nodes.push(Visit {
-            kind: self.current,
-            index: node,
-            depth,
-        });
-    }
-    fn test_prim(&mut self, prim: u32) {
-        self.prims.push(Visit {
-            kind: self.current,
-            index: prim,
-            depth: 0,
-        });
-    }
-}
-
-impl GeometryVisitor for TraversalLog {
-    fn begin_hierarchy(&mut self, kind: PrimKind) {
-        self.current = kind;
-    }
 }
 
 /// One ray traced for the pixel, with what it hit.
@@ -144,7 +69,7 @@ pub struct LightSampleRecord {
     pub arrived: Vec3,
 }
 
-/// The trace log of the debugged pixel. Its presence switches recording on.
+/// The trace of the debugged pixel, filled by the recorders.
 #[derive(Resource, Clone, Debug, Default)]
 pub struct DebugTrace {
     /// The pixel's camera samples.
@@ -153,75 +78,62 @@ pub struct DebugTrace {
     pub rays: Vec<RayRecord>,
     /// Every light sample evaluated, in trace order.
     pub lights: Vec<LightSampleRecord>,
-    sample: u32,
     depth_start: usize,
     light_start: usize,
 }
 
 impl DebugTrace {
-    /// Starts a new sample (called by `generate_camera_samples`).
-    pub fn record_camera_samples(
-        &mut self,
-        sample: u32,
-        rays: &[QueuedRay],
-        offset: impl Fn(u32) -> Vec2,
-    ) {
-        self.sample = sample;
-        for q in rays {
+    /// Records the camera samples of one pass, each with its offset within the pixel.
+    pub fn record_camera_samples(&mut self, sample: u32, rays: &[QueuedRay], offsets: &[Vec2]) {
+        for (q, offset) in rays.iter().zip(offsets) {
             self.camera_samples.push(CameraSampleRecord {
                 sample,
-                offset: offset(q.slot),
+                offset: *offset,
                 ray: q.ray,
             });
         }
     }
 
-    /// Records the rays of one depth level with their hits (called by `intersect_rays`).
+    /// Records the rays of one depth level with their hits and traversals.
     pub fn record_rays(
         &mut self,
+        sample: u32,
         depth: u32,
         rays: &[QueuedRay],
-        hits: impl IntoIterator<Item = (Option<(Hit, Surface)>, TraversalLog)>,
+        hits: &[Option<Surface>],
+        traces: Vec<RayTrace>,
     ) {
         self.depth_start = self.rays.len();
-        for (q, (hit, traversal)) in rays.iter().zip(hits) {
+        for ((q, surface), trace) in rays.iter().zip(hits).zip(traces) {
             self.rays.push(RayRecord {
-                sample: self.sample,
+                sample,
                 depth,
                 path: q.path,
                 ray: q.ray,
                 weight: q.weight,
-                hit,
-                traversal,
+                hit: trace.hit.zip(*surface),
+                traversal: trace.traversal,
                 radiance: Vec3::ZERO,
             });
         }
     }
 
-    /// Starts recording the light samples of one depth level (called by `shade_hits`).
-    pub fn begin_light_samples(&mut self) {
+    /// Records the light samples shading saw at the current depth.
+    pub fn record_light_samples(&mut self, seen: &[LightSampleSeen]) {
         self.light_start = self.lights.len();
+        for l in seen {
+            self.lights.push(LightSampleRecord {
+                ray: self.depth_start as u32 + l.ray,
+                light: l.light,
+                contribution: l.contribution,
+                shadow_ray: l.shadow_ray,
+                // Without a shadow ray the contribution arrives whole (shadows off) or is zero.
+                arrived: l.contribution,
+            });
+        }
     }
 
-    /// Records one light sample of queued ray `ray` of the current depth.
-    pub fn record_light_sample(
-        &mut self,
-        ray: usize,
-        light: LightSample,
-        contribution: Vec3,
-        shadow_ray: Option<u32>,
-    ) {
-        self.lights.push(LightSampleRecord {
-            ray: (self.depth_start + ray) as u32,
-            light,
-            contribution,
-            shadow_ray,
-            // Without a shadow ray the contribution arrives whole (shadows off) or is zero.
-            arrived: contribution,
-        });
-    }
-
-    /// Records what each shadow ray of the current depth let through (called by `trace_shadow_rays`).
+    /// Records what each shadow ray of the current depth let through.
     pub fn record_shadow_results(&mut self, arrived: &[Vec3]) {
         for l in &mut self.lights[self.light_start..] {
             if let Some(c) = l.shadow_ray.and_then(|s| arrived.get(s as usize)) {
@@ -230,7 +142,7 @@ impl DebugTrace {
         }
     }
 
-    /// Records the radiance each ray of the current depth gathered (called by `gather_radiance`).
+    /// Records the radiance each ray of the current depth gathered.
     pub fn record_radiance(&mut self, radiance: &[Vec3]) {
         for (r, c) in self.rays[self.depth_start..].iter_mut().zip(radiance) {
             r.radiance = *c;

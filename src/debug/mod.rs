@@ -1,13 +1,18 @@
 //! The visual debug: explains one pixel with debug-primitive entities.
 //!
 //! A debug run is a render of one pixel by the render's own schedules
-//! ([`crate::schedule`]): a [`PassRegion`] of one pixel per sample index, with a
-//! [`DebugTrace`] resource present so the tracing systems log what they do. The
-//! [`DebugEmit`] schedule's emitter systems, one per [`Feature`], then turn that log into
+//! ([`crate::schedule`]), one pixel per sample index. It adds a trace log
+//! ([`TraceLog`](crate::trace::log::TraceLog)), which the hot loops fill inline, and the
+//! [`record`] systems, which copy what each stage did into the [`DebugTrace`]. The
+//! [`DebugEmit`] schedule's emitter systems, one per [`Feature`], then turn that trace into
 //! [`DebugPrimitive`] entities, which [`overlay`] draws over a view of the scene from
 //! another viewpoint and [`dump`] writes as RON.
 //!
 //! ```text
+//! RenderPass:  generate_camera_samples -> record_camera_samples -> trace_wavefronts ...
+//! Bounce:      intersect_rays -> record_rays -> shade_hits -> record_light_samples
+//!              -> trace_shadow_rays? -> record_shadow_results -> gather_radiance
+//!              -> record_radiance -> spawn ...
 //! DebugEmit (once, after the pixel's samples):
 //!     emit_pixel, emit_reflections?, emit_transparency?, emit_bvh?, emit_bvh_level?,
 //!     emit_textures?, emit_lights?, emit_samples?
@@ -19,6 +24,7 @@ pub mod emit;
 pub mod log;
 pub mod overlay;
 pub mod primitives;
+pub mod record;
 pub mod view;
 
 use std::collections::BTreeSet;
@@ -41,11 +47,10 @@ use crate::trace::lights::Lights;
 use crate::trace::materials::Materials;
 use crate::trace::plan::RenderPlan;
 use crate::trace::surface::surface_at;
-use crate::trace::wavefront::camera_ray;
 
 pub use log::DebugTrace;
 pub use overlay::Canvas;
-pub use primitives::{DebugPrimitive, Feature, Shape, Values};
+pub use primitives::{DebugOrder, DebugPrimitive, Feature, Shape, Values};
 pub use view::ViewCamera;
 
 /// Brightness of the flat-shaded preview under the background render.
@@ -161,7 +166,8 @@ impl DebugSession {
                 size: [camera.width, camera.height],
             });
         }
-        renderer.world.insert_resource(DebugTrace::default());
+        record::add_recorders(&mut renderer.world);
+        renderer.world.init_resource::<emit::SpawnedPrimitives>();
         renderer.world.insert_resource(request);
         renderer.world.add_schedule(debug_emit_schedule());
         renderer.prepare()?;
@@ -194,12 +200,15 @@ impl DebugSession {
 
     /// Every debug primitive, in spawn order.
     pub fn primitives(&mut self) -> Vec<DebugPrimitive> {
-        let mut q = self.renderer.world.query::<(Entity, &DebugPrimitive)>();
-        let mut v: Vec<(Entity, DebugPrimitive)> = q
+        let mut q = self
+            .renderer
+            .world
+            .query::<(&DebugOrder, &DebugPrimitive)>();
+        let mut v: Vec<(DebugOrder, DebugPrimitive)> = q
             .iter(&self.renderer.world)
-            .map(|(e, p)| (e, p.clone()))
+            .map(|(n, p)| (*n, p.clone()))
             .collect();
-        v.sort_by_key(|(e, _)| e.index());
+        v.sort_by_key(|(n, _)| *n);
         v.into_iter().map(|(_, p)| p).collect()
     }
 
@@ -295,11 +304,9 @@ impl DebugSession {
         (0..width * height)
             .into_par_iter()
             .map(|i| {
-                let ray = camera_ray(
-                    &view.camera,
-                    (i % width) as f32 + 0.5,
-                    (i / width) as f32 + 0.5,
-                );
+                let ray = view
+                    .basis
+                    .ray((i % width) as f32 + 0.5, (i / width) as f32 + 0.5);
                 match g.intersect(&ray, f32::INFINITY, &mut ()) {
                     Some(hit) => {
                         let s = surface_at(g, &ray, &hit, true);

@@ -163,6 +163,10 @@ pub struct Values {
     pub radiance: Option<Vec3>,
 }
 
+/// A debug primitive's place in spawn order: the dump and the legend list primitives so.
+#[derive(Component, Clone, Copy, Debug, PartialEq, Eq, PartialOrd, Ord)]
+pub struct DebugOrder(pub u32);
+
 /// A debug primitive: one entity each, with its colour and the feature that emitted it.
 #[derive(Component, Clone, Debug, PartialEq, Serialize)]
 pub struct DebugPrimitive {

@@ -1,67 +1,46 @@
 //! The debug view: a camera other than the render's, projection of world points into
-//! its image, and clipping at its near plane.
+//! its image (the tracer's camera model), and clipping at its near plane.
 
 use glam::{Vec2, Vec3};
 
 use crate::accel::Aabb;
 use crate::scene::Camera;
+use crate::trace::camera::CameraBasis;
 
 /// Near-plane distance as a fraction of the view's distance to what it frames.
 const NEAR_FRACTION: f32 = 1e-3;
 
-/// A pinhole camera's basis, for projecting points into its image (the inverse of
-/// `trace::wavefront::camera_ray`).
+/// The debug view: a camera other than the render's, with a near plane. Projection is
+/// the tracer's camera model ([`CameraBasis::project`]), the inverse of its rays.
 #[derive(Clone, Debug, PartialEq)]
 pub struct ViewCamera {
     /// The scene camera it was made from (also used for the background render).
     pub camera: Camera,
-    /// Unit view direction.
-    pub forward: Vec3,
-    /// Unit right vector.
-    pub right: Vec3,
-    /// Unit up vector, orthogonal to `forward` and `right`.
-    pub up: Vec3,
-    /// `tan(fov_y / 2)`.
-    pub tan_half: f32,
-    /// Width over height.
-    pub aspect: f32,
-    /// Near-plane distance along `forward`: points closer are clipped.
+    /// Its frame.
+    pub basis: CameraBasis,
+    /// Near-plane distance along the view direction: points closer are clipped.
     pub near: f32,
 }
 
 impl ViewCamera {
-    /// The basis of `camera`, with near plane `near`.
+    /// The view through `camera`, with near plane `near`.
     pub fn new(camera: Camera, near: f32) -> Self {
-        let forward = (camera.look_at - camera.position).normalize();
-        let right = forward.cross(camera.up).normalize();
-        let up = right.cross(forward);
         Self {
-            tan_half: (camera.fov_y_degrees.to_radians() * 0.5).tan(),
-            aspect: camera.width as f32 / camera.height as f32,
+            basis: CameraBasis::new(&camera),
             camera,
-            forward,
-            right,
-            up,
             near,
         }
     }
 
     /// Depth of `p` along the view direction.
     pub fn depth(&self, p: Vec3) -> f32 {
-        (p - self.camera.position).dot(self.forward)
+        self.basis.depth(p)
     }
 
     /// Image position (pixels, row 0 at the top) and depth of `p`; `None` in front of the near plane.
     pub fn project(&self, p: Vec3) -> Option<(Vec2, f32)> {
-        let v = p - self.camera.position;
-        let z = v.dot(self.forward);
-        if z.is_nan() || z < self.near {
-            return None;
-        }
-        let sx = v.dot(self.right) / (z * self.tan_half * self.aspect);
-        let sy = v.dot(self.up) / (z * self.tan_half);
-        let (w, h) = (self.camera.width as f32, self.camera.height as f32);
-        Some((Vec2::new((sx + 1.0) * 0.5 * w, (1.0 - sy) * 0.5 * h), z))
+        let (x, y, z) = self.basis.project(p)?;
+        (z >= self.near).then_some((Vec2::new(x, y), z))
     }
 
     /// The part of segment `a`-`b` beyond the near plane, projected; `None` if all of it is behind.
@@ -84,19 +63,18 @@ impl ViewCamera {
     }
 
     fn project_on_near(&self, p: Vec3) -> Option<(Vec2, f32)> {
-        let v = p - self.camera.position;
-        let z = v.dot(self.forward);
+        let z = self.depth(p);
         // NaN fails this test too.
         if z.partial_cmp(&(self.near * 0.5)) != Some(std::cmp::Ordering::Greater) {
             return None;
         }
-        let moved = p + self.forward * (self.near - z);
+        let moved = p + self.basis.forward * (self.near - z);
         self.project(moved)
     }
 
     /// Pixels per world unit at depth `z`.
     pub fn pixels_per_unit(&self, z: f32) -> f32 {
-        self.camera.height as f32 / (2.0 * self.tan_half * z.max(self.near))
+        self.basis.height / self.basis.height_at(z.max(self.near))
     }
 }
 

@@ -1,8 +1,11 @@
 //! Tracing: the scene's geometry and its queries, the material and light tables, the
-//! render plan, and the wavefront systems of one depth level.
+//! render plan, the camera model, the wavefront systems of one depth level and their
+//! optional trace log.
 
+pub mod camera;
 pub mod geometry;
 pub mod lights;
+pub mod log;
 pub mod materials;
 pub mod plan;
 pub mod surface;

@@ -7,17 +7,18 @@
 //! ray of weight `w * (1 - alpha)`.
 
 use bevy_ecs::prelude::*;
-use glam::Vec3;
+use glam::{Vec2, Vec3};
 use rayon::prelude::*;
 
+use super::camera::CameraBasis;
 use super::lights::{LightSample, Lights};
+use super::log::{HitObserver, LightObserver, RayTrace, TraceLog};
 use super::materials::Materials;
 use super::plan::RenderPlan;
 use super::surface::{SHADOW_EPSILON, Surface, surface_at};
 use crate::accel::Ray;
-use crate::debug::log::{DebugTrace, TraversalLog};
 use crate::sampling::{Sampler, pixel_sample_offset, samples_taken};
-use crate::scene::{Camera, Settings};
+use crate::scene::{Camera, PixelSampling, Settings};
 use crate::shade::{Shading, ShadingInput};
 use crate::stats::{RenderStats, Stage};
 use crate::trace::geometry::SceneGeometry;
@@ -34,8 +35,68 @@ pub struct QueuedRay {
     pub weight: Vec3,
     /// Index of the camera sample (within the current region) it belongs to.
     pub slot: u32,
-    /// Branch id within the sample's ray tree (root 0; children 2k+1, 2k+2).
+    /// Branch id within the sample's ray tree (see [`Branch`]).
     pub path: u32,
+}
+
+impl QueuedRay {
+    /// The branch id of this ray's child along `branch`.
+    pub fn child_path(&self, branch: Branch) -> u32 {
+        branch.child_of(self.path)
+    }
+}
+
+/// A child in a sample's ray tree. Branch ids number the tree: the camera ray is 0, the
+/// reflection child of ray `k` is `2k + 1`, its pass-through child `2k + 2`.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Branch {
+    /// The reflected ray (odd ids).
+    Reflection,
+    /// The ray through a transparent surface (even ids above 0).
+    PassThrough,
+}
+
+impl Branch {
+    /// The branch id of the child along `self` of the ray with branch id `path`.
+    pub fn child_of(self, path: u32) -> u32 {
+        let step = match self {
+            Branch::Reflection => 1,
+            Branch::PassThrough => 2,
+        };
+        path.wrapping_mul(2).wrapping_add(step)
+    }
+
+    /// The branch that led to the ray with branch id `path`; `None` for the camera ray.
+    pub fn of_path(path: u32) -> Option<Branch> {
+        match path {
+            0 => None,
+            p if p % 2 == 1 => Some(Branch::Reflection),
+            _ => Some(Branch::PassThrough),
+        }
+    }
+}
+
+/// How a traced ray came to be, read from its branch id in the sample's ray tree.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, serde::Serialize)]
+#[serde(rename_all = "snake_case")]
+pub enum RayKind {
+    /// From the camera (the root).
+    Camera,
+    /// A reflection.
+    Reflection,
+    /// A pass-through ray.
+    PassThrough,
+}
+
+impl RayKind {
+    /// The kind of the ray with branch id `path` (see [`Branch`]).
+    pub fn of_path(path: u32) -> RayKind {
+        match Branch::of_path(path) {
+            None => RayKind::Camera,
+            Some(Branch::Reflection) => RayKind::Reflection,
+            Some(Branch::PassThrough) => RayKind::PassThrough,
+        }
+    }
 }
 
 /// A shadow ray: `contribution` reaches ray `owner`'s radiance if the path is clear.
@@ -73,6 +134,8 @@ pub struct Wavefront {
     pub ray_radiance: Vec<Vec3>,
     /// Shadow rays cast this depth.
     pub shadow_rays: Vec<ShadowRay>,
+    /// What each shadow ray let through: its contribution times visibility (or tint).
+    pub shadow_arrived: Vec<Vec3>,
     /// Rays for the next depth.
     pub next: Vec<QueuedRay>,
 }
@@ -86,48 +149,34 @@ pub struct SampleRadiance {
     pub values: Vec<Vec3>,
 }
 
-/// The camera's ray through image-plane position `(x, y)` in pixels (row 0 at the top).
-pub fn camera_ray(camera: &Camera, x: f32, y: f32) -> Ray {
-    CameraBasis::new(camera).ray(x, y)
+/// Where in its pixel each camera sample goes: the pixel centre unless the plan asks for
+/// sample patterns. The render and the debug recorder both ask it, so they agree.
+#[derive(Clone, Copy, Debug)]
+pub struct CameraSampleOffsets {
+    sampler: Sampler,
+    samples: u32,
+    mode: PixelSampling,
+    patterns: bool,
 }
 
-/// A camera's frame, computed once per pass rather than once per ray.
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub struct CameraBasis {
-    origin: Vec3,
-    forward: Vec3,
-    right: Vec3,
-    up: Vec3,
-    tan: f32,
-    aspect: f32,
-    width: f32,
-    height: f32,
-}
-
-impl CameraBasis {
-    /// The frame of `camera`.
-    pub fn new(camera: &Camera) -> Self {
-        let forward = (camera.look_at - camera.position).normalize();
-        let right = forward.cross(camera.up).normalize();
+impl CameraSampleOffsets {
+    /// The offsets the settings and the plan call for.
+    pub fn new(settings: &Settings, plan: &RenderPlan) -> Self {
+        let mode = settings.pixel_sampling;
         Self {
-            origin: camera.position,
-            forward,
-            right,
-            up: right.cross(forward),
-            tan: (camera.fov_y_degrees.to_radians() * 0.5).tan(),
-            aspect: camera.width as f32 / camera.height as f32,
-            width: camera.width as f32,
-            height: camera.height as f32,
+            sampler: Sampler::new(settings.seed),
+            samples: samples_taken(settings.pixel_samples, mode),
+            mode,
+            patterns: plan.pixel_patterns,
         }
     }
 
-    /// The ray through image-plane position `(x, y)` in pixels (row 0 at the top).
-    pub fn ray(&self, x: f32, y: f32) -> Ray {
-        let sx = (2.0 * x / self.width - 1.0) * self.tan * self.aspect;
-        let sy = (1.0 - 2.0 * y / self.height) * self.tan;
-        Ray {
-            origin: self.origin,
-            dir: (self.forward + sx * self.right + sy * self.up).normalize(),
+    /// Offset within `pixel` of its camera sample `sample`, in [0, 1)^2.
+    pub fn of(&self, pixel: u32, sample: u32) -> Vec2 {
+        if self.patterns {
+            pixel_sample_offset(&self.sampler, pixel, sample, self.samples, self.mode)
+        } else {
+            Vec2::splat(0.5)
         }
     }
 }
@@ -141,29 +190,19 @@ pub fn generate_camera_samples(
     mut wf: ResMut<Wavefront>,
     mut radiance: ResMut<SampleRadiance>,
     mut stats: ResMut<RenderStats>,
-    debug: Option<ResMut<DebugTrace>>,
 ) {
     let Some(camera) = cameras.iter().next() else {
         return;
     };
-    let sampler = Sampler::new(settings.seed);
-    let n = samples_taken(settings.pixel_samples, settings.pixel_sampling);
-    let (mode, patterns) = (settings.pixel_sampling, plan.pixel_patterns);
     let width = camera.width;
     let basis = CameraBasis::new(camera);
-    let offset_of = |slot: u32| {
-        if patterns {
-            pixel_sample_offset(&sampler, region.first_pixel + slot, region.sample, n, mode)
-        } else {
-            glam::Vec2::splat(0.5)
-        }
-    };
+    let offsets = CameraSampleOffsets::new(&settings, &plan);
     let rays: Vec<QueuedRay> = (0..region.pixels)
         .into_par_iter()
         .with_min_len(CHUNK)
         .map(|slot| {
             let pixel = region.first_pixel + slot;
-            let offset = offset_of(slot);
+            let offset = offsets.of(pixel, region.sample);
             let (x, y) = ((pixel % width) as f32, (pixel / width) as f32);
             QueuedRay {
                 ray: basis.ray(x + offset.x, y + offset.y),
@@ -173,9 +212,6 @@ pub fn generate_camera_samples(
             }
         })
         .collect();
-    if let Some(mut log) = debug {
-        log.record_camera_samples(region.sample, &rays, offset_of);
-    }
     stats.record(Stage::GenerateCameraSamples, rays.len() as u64);
     stats.rays.camera += rays.len() as u64;
     wf.depth = 0;
@@ -184,45 +220,49 @@ pub fn generate_camera_samples(
     wf.rays = rays;
 }
 
-/// Finds each ray's closest hit and builds its shading point.
+/// Each ray's closest hit and shading point, in queue order, with what `O` observed of
+/// each query (nothing for `()`).
+fn closest_hits<O: HitObserver>(
+    geometry: &SceneGeometry,
+    rays: &[QueuedRay],
+    interpolate: bool,
+) -> (Vec<Option<Surface>>, Vec<O>) {
+    // One observer slot per ray, filled in place: for `()` the slots take no memory and
+    // the loop is the plain query.
+    let mut observers: Vec<O> = std::iter::repeat_with(O::default)
+        .take(rays.len())
+        .collect();
+    let surfaces = rays
+        .par_iter()
+        .zip(observers.par_iter_mut())
+        .with_min_len(CHUNK)
+        .map(|(q, observer)| {
+            let hit = geometry.intersect(&q.ray, f32::INFINITY, observer);
+            observer.closest(hit.as_ref());
+            hit.map(|h| surface_at(geometry, &q.ray, &h, interpolate))
+        })
+        .collect();
+    (surfaces, observers)
+}
+
+/// Finds each ray's closest hit and builds its shading point; with a [`TraceLog`], also
+/// keeps each ray's traversal.
 pub fn intersect_rays(
     settings: Res<Settings>,
     geometry: Res<SceneGeometry>,
     mut wf: ResMut<Wavefront>,
     mut stats: ResMut<RenderStats>,
-    debug: Option<ResMut<DebugTrace>>,
+    log: Option<ResMut<TraceLog>>,
 ) {
     let interpolate = settings.normal_interpolation;
-    let hits = match debug {
-        None => wf
-            .rays
-            .par_iter()
-            .with_min_len(CHUNK)
-            .map(|q| {
-                geometry
-                    .intersect(&q.ray, f32::INFINITY, &mut ())
-                    .map(|h| surface_at(&geometry, &q.ray, &h, interpolate))
-            })
-            .collect(),
-        // The same query, with a visitor that records the traversal.
+    wf.hits = match log {
+        None => closest_hits::<()>(&geometry, &wf.rays, interpolate).0,
         Some(mut log) => {
-            let traced: Vec<_> = wf
-                .rays
-                .iter()
-                .map(|q| {
-                    let mut visits = TraversalLog::default();
-                    let hit = geometry
-                        .intersect(&q.ray, f32::INFINITY, &mut visits)
-                        .map(|h| (h, surface_at(&geometry, &q.ray, &h, interpolate)));
-                    (hit, visits)
-                })
-                .collect();
-            let hits = traced.iter().map(|(h, _)| h.map(|(_, s)| s)).collect();
-            log.record_rays(wf.depth, &wf.rays, traced);
+            let (hits, rays) = closest_hits::<RayTrace>(&geometry, &wf.rays, interpolate);
+            log.rays = rays;
             hits
         }
     };
-    wf.hits = hits;
     stats.record(Stage::IntersectRays, wf.rays.len() as u64);
 }
 
@@ -248,8 +288,8 @@ struct ShadeContext<'a> {
 }
 
 /// Direct light at ray `i`'s hit (or the background on a miss); its shadow rays are
-/// appended to `shadows`. `seen(sample, contribution, shadow ray index within this ray's
-/// rays)` observes every light sample (a no-op in a render, the trace log in a debug run).
+/// appended to `shadows`. `seen(sample, contribution, index in shadows)` observes every
+/// light sample (a no-op in a render, the trace log in a debug run).
 fn shade_ray(
     cx: &ShadeContext,
     i: usize,
@@ -262,7 +302,6 @@ fn shade_ray(
     let Some(surface) = hit else {
         return q.weight * s.background;
     };
-    let first_shadow = shadows.len();
     let m = &cx.materials.list[surface.material as usize];
     let w = q.weight * blend_alpha(s, m.alpha, cx.depth);
     let kd = cx.materials.kd_at(surface.material, surface.uv);
@@ -293,7 +332,7 @@ fn shade_ray(
                 return;
             }
             if cx.queue_shadows {
-                seen(ls, c, Some((shadows.len() - first_shadow) as u32));
+                seen(ls, c, Some(shadows.len() as u32));
                 shadows.push(ShadowRay {
                     ray: surface.shadow_ray_to(ls.position),
                     contribution: c,
@@ -307,8 +346,50 @@ fn shade_ray(
     direct
 }
 
+/// Shades rays and hits chunk by chunk, in parallel; returns each ray's radiance, the
+/// shadow rays and what `O` observed, all in queue order. Chunks, not rays, own the
+/// shadow-ray vectors: no allocation per ray, and joining them in chunk order keeps the
+/// queue deterministic.
+fn shade_chunks<O: LightObserver>(
+    cx: &ShadeContext,
+    rays: &[QueuedRay],
+    hits: &[Option<Surface>],
+) -> (Vec<Vec3>, Vec<ShadowRay>, O) {
+    let chunks: Vec<(Vec<Vec3>, Vec<ShadowRay>, O)> = rays
+        .par_chunks(CHUNK)
+        .zip(hits.par_chunks(CHUNK))
+        .enumerate()
+        .map(|(c, (rays, hits))| {
+            let mut shadows = Vec::new();
+            let mut observer = O::default();
+            let radiance = rays
+                .iter()
+                .zip(hits)
+                .enumerate()
+                .map(|(k, (q, hit))| {
+                    let i = c * CHUNK + k;
+                    shade_ray(cx, i, q, hit, &mut shadows, |ls, c, shadow| {
+                        observer.seen(i as u32, ls, c, shadow)
+                    })
+                })
+                .collect();
+            (radiance, shadows, observer)
+        })
+        .collect();
+    let mut radiance = Vec::with_capacity(rays.len());
+    let mut shadow_rays = Vec::new();
+    let mut observed = O::default();
+    for (r, s, o) in chunks {
+        observed.join(o, shadow_rays.len() as u32);
+        radiance.extend(r);
+        shadow_rays.extend(s);
+    }
+    (radiance, shadow_rays, observed)
+}
+
 /// Shades every hit: direct light from every light sample, either added at once
-/// (shadows off) or queued as shadow rays; misses get the background.
+/// (shadows off) or queued as shadow rays; misses get the background. With a
+/// [`TraceLog`], also keeps every light sample.
 #[allow(clippy::too_many_arguments)] // Because each is a resource the stage reads.
 pub fn shade_hits(
     settings: Res<Settings>,
@@ -318,7 +399,7 @@ pub fn shade_hits(
     region: Res<PassRegion>,
     mut wf: ResMut<Wavefront>,
     mut stats: ResMut<RenderStats>,
-    debug: Option<ResMut<DebugTrace>>,
+    log: Option<ResMut<TraceLog>>,
 ) {
     let s = &*settings;
     let cx = ShadeContext {
@@ -336,54 +417,14 @@ pub fn shade_hits(
         depth: wf.depth,
         queue_shadows: plan.shadow_rays,
     };
-    let (radiance, shadow_rays) = match debug {
-        // Chunks, not rays, own the shadow-ray vectors: no allocation per ray, and the
-        // concatenation in chunk order keeps the queue deterministic.
+    let (radiance, shadow_rays) = match log {
         None => {
-            let chunks: Vec<(Vec<Vec3>, Vec<ShadowRay>)> = wf
-                .rays
-                .par_chunks(CHUNK)
-                .zip(wf.hits.par_chunks(CHUNK))
-                .enumerate()
-                .map(|(c, (rays, hits))| {
-                    let mut shadows = Vec::new();
-                    let radiance = rays
-                        .iter()
-                        .zip(hits)
-                        .enumerate()
-                        .map(|(k, (q, hit))| {
-                            shade_ray(&cx, c * CHUNK + k, q, hit, &mut shadows, |_, _, _| {})
-                        })
-                        .collect();
-                    (radiance, shadows)
-                })
-                .collect();
-            let mut radiance = Vec::with_capacity(wf.rays.len());
-            let mut shadow_rays = Vec::new();
-            for (r, s) in chunks {
-                radiance.extend(r);
-                shadow_rays.extend(s);
-            }
+            let (radiance, shadow_rays, ()) = shade_chunks(&cx, &wf.rays, &wf.hits);
             (radiance, shadow_rays)
         }
-        // The same shading, one ray after another, logging every light sample.
         Some(mut log) => {
-            log.begin_light_samples();
-            let mut shadow_rays = Vec::new();
-            let mut radiance = Vec::with_capacity(wf.rays.len());
-            for (i, (q, hit)) in wf.rays.iter().zip(&wf.hits).enumerate() {
-                let queued = shadow_rays.len() as u32;
-                radiance.push(shade_ray(
-                    &cx,
-                    i,
-                    q,
-                    hit,
-                    &mut shadow_rays,
-                    |ls, c, shadow| {
-                        log.record_light_sample(i, ls, c, shadow.map(|k| queued + k));
-                    },
-                ));
-            }
+            let (radiance, shadow_rays, seen) = shade_chunks(&cx, &wf.rays, &wf.hits);
+            log.light_samples = seen;
             (radiance, shadow_rays)
         }
     };
@@ -403,12 +444,12 @@ pub fn trace_shadow_rays(
     materials: Res<Materials>,
     mut wf: ResMut<Wavefront>,
     mut stats: ResMut<RenderStats>,
-    debug: Option<ResMut<DebugTrace>>,
 ) {
     let t_max = 1.0 - SHADOW_EPSILON;
     let transparent = plan.transparent_shadows;
-    let visible: Vec<Vec3> = wf
-        .shadow_rays
+    let wf = &mut *wf;
+    // Into the buffer of the last depth: its allocation is reused, not made anew.
+    wf.shadow_rays
         .par_iter()
         .with_min_len(CHUNK)
         .map(|s| {
@@ -420,37 +461,26 @@ pub fn trace_shadow_rays(
                 s.contribution
             }
         })
-        .collect();
-    if let Some(mut log) = debug {
-        log.record_shadow_results(&visible);
-    }
-    let wf = &mut *wf;
-    for (s, c) in wf.shadow_rays.iter().zip(visible) {
-        wf.ray_radiance[s.owner as usize] += c;
+        .collect_into_vec(&mut wf.shadow_arrived);
+    for (s, c) in wf.shadow_rays.iter().zip(&wf.shadow_arrived) {
+        wf.ray_radiance[s.owner as usize] += *c;
     }
     stats.record(Stage::TraceShadowRays, wf.shadow_rays.len() as u64);
     stats.rays.shadow += wf.shadow_rays.len() as u64;
 }
 
 /// Adds each ray's radiance into its camera sample, in queue order (deterministic).
-pub fn gather_radiance(
-    wf: Res<Wavefront>,
-    mut radiance: ResMut<SampleRadiance>,
-    debug: Option<ResMut<DebugTrace>>,
-) {
-    if let Some(mut log) = debug {
-        log.record_radiance(&wf.ray_radiance);
-    }
+pub fn gather_radiance(wf: Res<Wavefront>, mut radiance: ResMut<SampleRadiance>) {
     for (q, c) in wf.rays.iter().zip(&wf.ray_radiance) {
         radiance.values[q.slot as usize] += *c;
     }
 }
 
 /// The child rays of every hit for which `make` gives a ray and a weight, in queue
-/// order; `branch` (1 reflection, 2 pass-through) numbers the child in the ray tree.
+/// order, as children along `branch` in the ray tree.
 fn spawn_children(
     wf: &Wavefront,
-    branch: u32,
+    branch: Branch,
     make: impl Fn(&QueuedRay, &Surface) -> Option<(Ray, Vec3)>,
 ) -> Vec<QueuedRay> {
     wf.rays
@@ -462,7 +492,7 @@ fn spawn_children(
                 ray,
                 weight,
                 slot: q.slot,
-                path: q.path.wrapping_mul(2).wrapping_add(branch),
+                path: q.child_path(branch),
             })
         })
         .collect()
@@ -479,7 +509,7 @@ pub fn spawn_reflection_rays(
         return;
     }
     let depth = wf.depth;
-    let spawned = spawn_children(&wf, 1, |q, surface| {
+    let spawned = spawn_children(&wf, Branch::Reflection, |q, surface| {
         let m = &materials.list[surface.material as usize];
         let weight = q.weight * blend_alpha(&settings, m.alpha, depth) * m.ks;
         (weight != Vec3::ZERO).then(|| (surface.reflection_ray(q.ray.dir), weight))
@@ -499,7 +529,7 @@ pub fn spawn_pass_through_rays(
     if wf.depth >= settings.max_depth {
         return;
     }
-    let spawned = spawn_children(&wf, 2, |q, surface| {
+    let spawned = spawn_children(&wf, Branch::PassThrough, |q, surface| {
         let alpha = materials.list[surface.material as usize].alpha;
         let weight = q.weight * (1.0 - alpha);
         (alpha != 1.0 && weight != Vec3::ZERO)
