@@ -30,12 +30,7 @@ pub fn coincident(b: &Budget) -> Vec<Row> {
         ) else {
             continue;
         };
-        rows.push(Row::at_most(
-            &case,
-            "non-finite pixels and samples",
-            a.nonfinite(),
-            0.0,
-        ));
+        rows.push(Row::finite(&case, a.nonfinite()));
         rows.push(Row::at_most(
             &case,
             "difference between two runs",
@@ -72,7 +67,7 @@ pub fn coincident(b: &Budget) -> Vec<Row> {
         let (Some(a), Some(again)) = (try_render(&case, &text, &mut rows), try_render(&case, &text, &mut rows)) else {
             continue;
         };
-        rows.push(Row::at_most(&case, "non-finite pixels and samples", a.nonfinite(), 0.0));
+        rows.push(Row::finite(&case, a.nonfinite()));
         rows.push(Row::at_most(&case, "difference between two runs", a.max_diff(&again), 0.0));
         let tol = if expected == Vec3::ZERO { 0.0 } else { 1e-6 };
         let wrong = a

@@ -48,12 +48,7 @@ pub fn deep_chains(b: &Budget) -> Vec<Row> {
         } else {
             kd.as_dvec3() * expected + bg.as_dvec3() * rest
         };
-        rows.push(Row::at_most(
-            &case,
-            "non-finite pixels and samples",
-            img.nonfinite(),
-            0.0,
-        ));
+        rows.push(Row::finite(&case, img.nonfinite()));
         rows.push(Row::at_most(
             &case,
             "max |pixel - closed form|",
@@ -95,12 +90,7 @@ pub fn deep_chains(b: &Budget) -> Vec<Row> {
         let t = (1.0 - a as f64)
             * (glam::DVec3::ONE - (glam::DVec3::ONE - kd_glass.as_dvec3()) * a as f64);
         let expected = kd_floor.as_dvec3() * t.powf(100.0);
-        rows.push(Row::at_most(
-            case,
-            "non-finite pixels and samples",
-            img.nonfinite(),
-            0.0,
-        ));
+        rows.push(Row::finite(case, img.nonfinite()));
         rows.push(Row::at_most(
             case,
             "max |pixel - closed form|",
@@ -169,12 +159,7 @@ pub fn deep_chains(b: &Budget) -> Vec<Row> {
         };
         let expected = kd * (1.0 - ks.powi(depth as i32 + 1)) / (1.0 - ks);
         let pixels = (img.width * img.height) as f64;
-        rows.push(Row::at_most(
-            &case,
-            "non-finite pixels and samples",
-            img.nonfinite(),
-            0.0,
-        ));
+        rows.push(Row::finite(&case, img.nonfinite()));
         rows.push(Row::at_most(
             &case,
             "max |pixel - closed form|",

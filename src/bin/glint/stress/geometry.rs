@@ -422,12 +422,7 @@ pub fn degenerate(b: &Budget) -> Vec<Row> {
         Ok(r) => r,
         Err(e) => return vec![Row::error(case, e)],
     };
-    rows.push(Row::at_most(
-        case,
-        "non-finite pixels and samples",
-        rendered.nonfinite(),
-        0.0,
-    ));
+    rows.push(Row::finite(case, rendered.nonfinite()));
 
     // Trace straight at the degenerate triangles: the loaded, world-space geometry.
     let mut renderer = Renderer::from_scene(&parse_scene(&text, path).expect("parsed above"), path)

@@ -60,12 +60,7 @@ pub fn lights(b: &Budget) -> Vec<Row> {
     ] {
         let case = format!("light {label}");
         if let Some(img) = try_render(&case, &lit(lam, &light, 0.5), &mut rows) {
-            rows.push(Row::at_most(
-                &case,
-                "non-finite pixels and samples",
-                img.nonfinite(),
-                0.0,
-            ));
+            rows.push(Row::finite(&case, img.nonfinite()));
             rows.push(Row::at_most(
                 &case,
                 "max |image - point light image|",
@@ -77,12 +72,7 @@ pub fn lights(b: &Budget) -> Vec<Row> {
     let case = "light parallelogram with nearly parallel edges";
     let light = "ParallelogramLight((v0: (-1.0, 2.0, 0.0), edge01: (2.0, 0.0, 0.0), edge02: (2.0, 1e-7, 0.0)))";
     if let Some(img) = try_render(case, &lit(lam, light, 0.5), &mut rows) {
-        rows.push(Row::at_most(
-            case,
-            "non-finite pixels and samples",
-            img.nonfinite(),
-            0.0,
-        ));
+        rows.push(Row::finite(case, img.nonfinite()));
     }
     let case = "light colour 1e6";
     if let Some(img) = try_render(
@@ -100,12 +90,7 @@ pub fn lights(b: &Budget) -> Vec<Row> {
             .zip(&point.image)
             .map(|(a, b)| ((*a / 1e6 - *b).abs().max_element() / b.max_element().max(1e-6)) as f64)
             .fold(0.0, f64::max);
-        rows.push(Row::at_most(
-            case,
-            "non-finite pixels and samples",
-            img.nonfinite(),
-            0.0,
-        ));
+        rows.push(Row::finite(case, img.nonfinite()));
         rows.push(Row::at_most(
             case,
             "max relative |image / 1e6 - colour 1 image|",
@@ -124,12 +109,7 @@ pub fn lights(b: &Budget) -> Vec<Row> {
         ),
     );
     if let Some(img) = try_render(case, &text, &mut rows) {
-        rows.push(Row::at_most(
-            case,
-            "non-finite pixels and samples",
-            img.nonfinite(),
-            0.0,
-        ));
+        rows.push(Row::finite(case, img.nonfinite()));
         rows.push(Row::at_most(
             case,
             "lit pixels (light leaking out)",
@@ -148,12 +128,7 @@ pub fn lights(b: &Budget) -> Vec<Row> {
             0.5,
         );
         if let Some(img) = try_render(&case, &text, &mut rows) {
-            rows.push(Row::at_most(
-                &case,
-                "non-finite pixels and samples",
-                img.nonfinite(),
-                0.0,
-            ));
+            rows.push(Row::finite(&case, img.nonfinite()));
             rows.push(Row::at_most(
                 &case,
                 "pixels off the closed form",

@@ -51,6 +51,11 @@ pub struct Row {
 }
 
 impl Row {
+    /// The row every rendered case has: no NaN or infinite pixel or sample.
+    pub fn finite(case: impl Into<String>, nonfinite: f64) -> Self {
+        Self::at_most(case, "non-finite pixels and samples", nonfinite, 0.0)
+    }
+
     /// A row that passes when `value <= bound`.
     pub fn at_most(
         case: impl Into<String>,

@@ -148,12 +148,7 @@ fn measure(
         Ok(r) => r,
         Err(e) => return vec![Row::error(case, e)],
     };
-    rows.push(Row::at_most(
-        case,
-        "non-finite pixels and samples",
-        full.nonfinite() + probe.nonfinite(),
-        0.0,
-    ));
+    rows.push(Row::finite(case, full.nonfinite() + probe.nonfinite()));
     if let Some(unit) = unit {
         rows.push(Row::at_most(
             case,

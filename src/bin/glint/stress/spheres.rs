@@ -29,12 +29,7 @@ pub fn spheres(b: &Budget) -> Vec<Row> {
         try_render(case, &lit_sphere(1e-6), &mut rows),
         try_render(case, &lit_sphere(1.0), &mut rows),
     ) {
-        rows.push(Row::at_most(
-            case,
-            "non-finite pixels and samples",
-            tiny.nonfinite(),
-            0.0,
-        ));
+        rows.push(Row::finite(case, tiny.nonfinite()));
         rows.push(Row::at_most(
             case,
             "mean |image - radius 1 image|",
@@ -77,12 +72,7 @@ pub fn spheres(b: &Budget) -> Vec<Row> {
             margin: 8.0 * f32::EPSILON as f64 * 1e6,
         };
         let c = reference.count(&camera, &img, Vec3::splat(0.5));
-        rows.push(Row::at_most(
-            case,
-            "non-finite pixels and samples",
-            img.nonfinite(),
-            0.0,
-        ));
+        rows.push(Row::finite(case, img.nonfinite()));
         rows.push(Row::at_most(
             case,
             "acne pixels (lit expected, dark rendered)",
@@ -129,12 +119,7 @@ pub fn spheres(b: &Budget) -> Vec<Row> {
             ),
         );
         if let Some(img) = try_render(&case, &text, &mut rows) {
-            rows.push(Row::at_most(
-                &case,
-                "non-finite pixels and samples",
-                img.nonfinite(),
-                0.0,
-            ));
+            rows.push(Row::finite(&case, img.nonfinite()));
             rows.push(Row::at_most(
                 &case,
                 "pixels off the closed form (kd)",

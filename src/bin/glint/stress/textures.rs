@@ -104,12 +104,7 @@ pub fn textures(b: &Budget) -> Vec<Row> {
             }
         }
     }
-    rows.push(Row::at_most(
-        "texture 1x1, uv +-1e6",
-        "non-finite pixels and samples",
-        nonfinite,
-        0.0,
-    ));
+    rows.push(Row::finite("texture 1x1, uv +-1e6", nonfinite));
     rows.push(Row::at_most(
         "texture 1x1, uv +-1e6",
         "pixels not the texel",
@@ -148,11 +143,9 @@ pub fn textures(b: &Budget) -> Vec<Row> {
             }
         }
     }
-    rows.push(Row::at_most(
+    rows.push(Row::finite(
         "texture 2x2, uv +-1e6 repeat/mirror",
-        "non-finite pixels and samples",
         nonfinite,
-        0.0,
     ));
     rows.push(Row::at_most(
         "texture 2x2, uv +-1e6 repeat/mirror",
@@ -201,11 +194,9 @@ pub fn textures(b: &Budget) -> Vec<Row> {
             }
         }
     }
-    rows.push(Row::at_most(
+    rows.push(Row::finite(
         "texture 4096x1 and 1x4096, uv +-1e6",
-        "non-finite pixels and samples",
         nonfinite,
-        0.0,
     ));
     rows.push(Row::at_most(
         "texture 4096x1 and 1x4096, uv +-1e6",
