@@ -236,3 +236,23 @@ fn info_explains_the_plan() {
     assert!(text.contains("shadows are off"), "{text}");
     assert!(text.contains("runs    build_triangle_bvh"), "{text}");
 }
+
+/// `glint info scene.ron | head -1`: the reader closes the pipe before glint writes.
+#[test]
+fn a_closed_stdout_pipe_ends_the_cli_quietly() {
+    use std::process::Stdio;
+    let dir = scene_dir(GOOD);
+    let mut child = Command::new(env!("CARGO_BIN_EXE_glint"))
+        .current_dir(dir.path())
+        .args(["info", "scene.ron"])
+        .stdout(Stdio::piped())
+        .stderr(Stdio::piped())
+        .spawn()
+        .unwrap();
+    // Closing the read end now, before glint has loaded the scene, makes its write fail.
+    drop(child.stdout.take());
+    let out = child.wait_with_output().unwrap();
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert!(out.status.success(), "status {:?}: {stderr}", out.status);
+    assert!(!stderr.contains("panicked"), "{stderr}");
+}

@@ -40,7 +40,7 @@ pub fn run(args: &ConvergeArgs) -> CliResult<Option<Interrupted>> {
         interrupt: Some(ctrl_c_flag()?),
     };
     let report = glint::converge::run(&options, &mut |line| eprintln!("{line}"))?;
-    print!("{}", table(&report));
+    crate::print_stdout(&table(&report));
     if report.interrupted {
         eprintln!("interrupted: the table, CSV and plot hold the passes measured so far");
     }

@@ -77,8 +77,23 @@ pub fn ctrl_c_flag() -> CliResult<Arc<AtomicBool>> {
 fn info(args: &cli::SceneArgs) -> CliResult<()> {
     check_settings("--set", args.set.iter().map(|(k, v)| (k, v)))?;
     let mut renderer = glint::Renderer::from_file(&args.scene, &args.overrides())?;
-    print!("{}", glint::info::describe(&mut renderer)?);
+    print_stdout(&glint::info::describe(&mut renderer)?);
     Ok(())
+}
+
+/// Writes `text` to standard output. A reader that has gone away (`glint info | head -1`)
+/// ends the program quietly, as it does for other command-line tools, instead of the
+/// panic `print!` raises on a closed pipe.
+pub fn print_stdout(text: &str) {
+    use std::io::Write;
+    let mut out = std::io::stdout().lock();
+    if let Err(e) = out.write_all(text.as_bytes()).and_then(|()| out.flush()) {
+        if e.kind() == std::io::ErrorKind::BrokenPipe {
+            std::process::exit(0);
+        }
+        eprintln!("error: cannot write to standard output: {e}");
+        std::process::exit(1);
+    }
 }
 
 fn main() -> ExitCode {

@@ -307,7 +307,7 @@ pub fn run(args: &StressArgs) -> CliResult<()> {
         );
         rows.extend(r);
     }
-    print!("{}", table(&rows));
+    crate::print_stdout(&table(&rows));
     if let Some(path) = &args.csv {
         glint::film::write_atomically(path, csv(&rows).as_bytes())?;
     }
