@@ -256,3 +256,19 @@ fn a_closed_stdout_pipe_ends_the_cli_quietly() {
     assert!(out.status.success(), "status {:?}: {stderr}", out.status);
     assert!(!stderr.contains("panicked"), "{stderr}");
 }
+
+#[test]
+fn the_cli_bounds_threads_and_reads_zero_as_all_cores() {
+    let (ok, stderr, _dir) = run_cli(Some(GOOD), &["render", "scene.ron", "--threads", "100000"]);
+    assert!(!ok);
+    assert!(
+        stderr.starts_with("error: --threads 100000 is more than 4 per core"),
+        "{stderr}"
+    );
+    let (ok, stderr, dir) = run_cli(
+        Some(GOOD),
+        &["render", "scene.ron", "-o", "out.png", "--threads", "0"],
+    );
+    assert!(ok, "{stderr}");
+    assert!(dir.path().join("out.png").exists());
+}

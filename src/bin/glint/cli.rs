@@ -80,7 +80,7 @@ pub struct StressArgs {
     /// Run only the cases whose name contains this text.
     #[arg(long = "case", value_name = "NAME")]
     pub case: Option<String>,
-    /// Worker threads (default: all cores).
+    /// Worker threads (default or 0: all cores; at most 4 per core).
     #[arg(long)]
     pub threads: Option<usize>,
 }
@@ -123,7 +123,7 @@ pub struct RenderArgs {
     /// Output image; `.png` or `.exr`. Defaults to the scene's name with `.png`.
     #[arg(short, long)]
     pub output: Option<PathBuf>,
-    /// Worker threads (default: all cores). Output is identical for any count.
+    /// Worker threads (default or 0: all cores; at most 4 per core). Output is identical for any count.
     #[arg(long)]
     pub threads: Option<usize>,
     /// Stop after the pass that exceeds this time budget, e.g. `30s`, `2m`, `500ms`.
@@ -165,7 +165,7 @@ pub struct ConvergeArgs {
     /// Plot RMSE against seconds and against spp (log-log) into this PNG.
     #[arg(long)]
     pub plot: Option<PathBuf>,
-    /// Worker threads (default: all cores).
+    /// Worker threads (default or 0: all cores; at most 4 per core).
     #[arg(long)]
     pub threads: Option<usize>,
 }
