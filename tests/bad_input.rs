@@ -272,3 +272,81 @@ fn the_cli_bounds_threads_and_reads_zero_as_all_cores() {
     assert!(ok, "{stderr}");
     assert!(dir.path().join("out.png").exists());
 }
+
+#[test]
+fn the_cli_refuses_an_output_it_cannot_write_before_rendering() {
+    let (ok, stderr, dir) = run_cli(Some(GOOD), &["render", "scene.ron", "-o", "x.bmp"]);
+    assert!(!ok && stderr.contains("unknown output format"), "{stderr}");
+    assert!(!dir.path().join("x.bmp").exists());
+
+    let dir = scene_dir(GOOD);
+    std::fs::create_dir(dir.path().join("taken.png")).unwrap();
+    let out = Command::new(env!("CARGO_BIN_EXE_glint"))
+        .current_dir(dir.path())
+        .args(["render", "scene.ron", "-o", "taken.png"])
+        .output()
+        .unwrap();
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert!(!out.status.success());
+    assert!(
+        stderr.starts_with("error: taken.png: is a folder, not an image file"),
+        "{stderr}"
+    );
+    // The summary line is printed after a render: none ran.
+    assert!(!stderr.contains("spp"), "{stderr}");
+}
+
+#[test]
+fn the_cli_refuses_an_unwritable_output_folder_before_rendering() {
+    use std::os::unix::fs::PermissionsExt;
+    let dir = scene_dir(GOOD);
+    let locked = dir.path().join("locked");
+    std::fs::create_dir(&locked).unwrap();
+    std::fs::set_permissions(&locked, std::fs::Permissions::from_mode(0o555)).unwrap();
+    if tempfile::tempfile_in(&locked).is_ok() {
+        eprintln!("skipped: a read-only folder is writable here (running as root)");
+        return;
+    }
+    let out = Command::new(env!("CARGO_BIN_EXE_glint"))
+        .current_dir(dir.path())
+        .args(["render", "scene.ron", "-o", "locked/out.png"])
+        .output()
+        .unwrap();
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert!(!out.status.success());
+    assert!(
+        stderr.contains("cannot write in the folder locked"),
+        "{stderr}"
+    );
+}
+
+/// Ctrl-C in the first pass: the unfinished image goes beside the output, which keeps
+/// the complete image it held.
+#[test]
+fn an_interrupted_first_pass_does_not_replace_the_output() {
+    // A first pass of many seconds: 1024x1024 pixels, 64 shadow rays each.
+    let scene = common::sphere_under_area_light(1024, "shadow_samples: 64");
+    let dir = scene_dir(&scene);
+    std::fs::write(dir.path().join("out.png"), b"previous").unwrap();
+    let child = Command::new(env!("CARGO_BIN_EXE_glint"))
+        .current_dir(dir.path())
+        .args(["render", "scene.ron", "-o", "out.png", "--threads", "1"])
+        .stderr(std::process::Stdio::piped())
+        .spawn()
+        .unwrap();
+    std::thread::sleep(std::time::Duration::from_millis(1500));
+    let kill = Command::new("kill")
+        .args(["-INT", &child.id().to_string()])
+        .status()
+        .unwrap();
+    assert!(kill.success());
+    let out = child.wait_with_output().unwrap();
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert_eq!(out.status.code(), Some(130), "{stderr}");
+    assert_eq!(
+        std::fs::read(dir.path().join("out.png")).unwrap(),
+        b"previous"
+    );
+    assert!(dir.path().join("out.partial.png").exists(), "{stderr}");
+    assert!(stderr.contains("out.partial.png"), "{stderr}");
+}

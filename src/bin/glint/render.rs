@@ -15,6 +15,40 @@ fn default_output(scene: &Path) -> PathBuf {
     PathBuf::from(format!("{stem}.png"))
 }
 
+/// Fails on an output glint could not write, before any time is spent on the render:
+/// an unknown format, a folder in its place, a missing or unwritable folder.
+fn check_output(output: &Path) -> CliResult<()> {
+    let flag = |why: String| Err(CliError::Flag(format!("{}: {why}", output.display())));
+    match output.extension().and_then(|e| e.to_str()) {
+        Some(e) if e.eq_ignore_ascii_case("png") || e.eq_ignore_ascii_case("exr") => {}
+        _ => return flag("unknown output format (use .png or .exr)".into()),
+    }
+    if output.is_dir() {
+        return flag("is a folder, not an image file".into());
+    }
+    let dir = match output.parent().filter(|d| !d.as_os_str().is_empty()) {
+        Some(d) if !d.is_dir() => {
+            return flag(format!("the output folder {} does not exist", d.display()));
+        }
+        Some(d) => d,
+        None => Path::new("."),
+    };
+    // The image is written through a temporary file in the same folder: try one now.
+    if let Err(e) = tempfile::tempfile_in(dir) {
+        return flag(format!("cannot write in the folder {}: {e}", dir.display()));
+    }
+    Ok(())
+}
+
+/// Where an interrupted render with unfinished pixels goes: beside the output
+/// (`name.partial.png`), so that a complete image of the same name is never replaced
+/// by one whose unfinished pixels are black.
+fn partial_path(output: &Path) -> PathBuf {
+    let stem = output.file_stem().unwrap_or_default().to_string_lossy();
+    let ext = output.extension().unwrap_or_default().to_string_lossy();
+    output.with_file_name(format!("{stem}.partial.{ext}"))
+}
+
 /// Renders, writes the image and prints the summary (or why the image is partial).
 pub fn run(args: &RenderArgs) -> CliResult<Option<Interrupted>> {
     set_threads(args.threads)?;
@@ -22,25 +56,7 @@ pub fn run(args: &RenderArgs) -> CliResult<Option<Interrupted>> {
         .output
         .clone()
         .unwrap_or_else(|| default_output(&args.scene.scene));
-    // Fail on a bad output name before spending time on the render.
-    match output.extension().and_then(|e| e.to_str()) {
-        Some(e) if e.eq_ignore_ascii_case("png") || e.eq_ignore_ascii_case("exr") => {}
-        _ => {
-            return Err(CliError::Flag(format!(
-                "{}: unknown output format (use .png or .exr)",
-                output.display()
-            )));
-        }
-    }
-    if let Some(dir) = output.parent().filter(|d| !d.as_os_str().is_empty())
-        && !dir.is_dir()
-    {
-        return Err(CliError::Flag(format!(
-            "{}: the output folder {} does not exist",
-            output.display(),
-            dir.display()
-        )));
-    }
+    check_output(&output)?;
     check_settings("--set", args.scene.set.iter().map(|(k, v)| (k, v)))?;
     let mut renderer = Renderer::from_file(&args.scene.scene, &args.scene.overrides())?;
     for w in renderer.warnings() {
@@ -77,11 +93,19 @@ pub fn run(args: &RenderArgs) -> CliResult<Option<Interrupted>> {
     } else {
         Encoding::Linear
     };
+    // Some pixels have no sample only when the first pass was cut short.
+    let output = if summary.interrupted && least == 0 {
+        partial_path(&output)
+    } else {
+        output
+    };
     write_image(&output, film.width, film.height, &film.image(), encoding)?;
     if summary.interrupted {
         // Counts exclude dropped non-finite samples, so state the passes too.
         let held = if least == most {
             format!("{least} samples per pixel")
+        } else if least == 0 {
+            format!("pixels with up to {most} samples and unfinished (black) pixels")
         } else {
             format!("{least} to {most} samples per pixel (the last pass was cut short)")
         };
