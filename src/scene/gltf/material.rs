@@ -10,7 +10,9 @@ use glam::{Vec2, Vec3};
 use gltf::texture::WrappingMode;
 
 use super::Importer;
+use crate::error::{AssetError, Result};
 use crate::scene::components::*;
+use crate::scene::import::asset_err;
 use crate::scene::texture::{Texture, WrapMode};
 
 /// Dielectric reflectance at normal incidence (the glTF metallic-roughness model's F0).
@@ -126,9 +128,9 @@ impl Importer<'_> {
         }
     }
 
-    pub(super) fn material(&mut self, world: &mut World, m: &gltf::Material) -> Entity {
+    pub(super) fn material(&mut self, world: &mut World, m: &gltf::Material) -> Result<Entity> {
         if let Some(&e) = self.materials.get(&m.index()) {
-            return e;
+            return Ok(e);
         }
         let name = match (m.name(), m.index()) {
             (Some(n), _) => n.to_owned(),
@@ -160,7 +162,10 @@ impl Importer<'_> {
                 let texture = info.texture();
                 let sampler = texture.sampler();
                 let wrap = [wrap_mode(sampler.wrap_s()), wrap_mode(sampler.wrap_t())];
-                (self.texture(texture.source().index(), kd), wrap)
+                (
+                    Some(self.texture(&name, texture.source().index(), kd)?),
+                    wrap,
+                )
             }
             None => (None, [WrapMode::Repeat; 2]),
         };
@@ -179,21 +184,45 @@ impl Importer<'_> {
             ))
             .id();
         self.materials.insert(m.index(), e);
-        e
+        Ok(e)
     }
 
-    /// The base colour texture times `scale` (the factor and the metallic share), decoded
-    /// from sRGB once per (image, scale). An image that cannot be decoded is reported as a
-    /// missing texture: the material keeps its plain colour.
-    fn texture(&mut self, image: usize, scale: Vec3) -> Option<TextureSource> {
+    /// The base colour texture of material `material` times `scale` (the factor and the
+    /// metallic share), decoded from sRGB once per (image, scale). An image that is
+    /// missing or cannot be decoded is an error naming the material and the image, as a
+    /// missing texture in a RON scene is: a model must not render untextured in silence.
+    fn texture(&mut self, material: &str, image: usize, scale: Vec3) -> Result<TextureSource> {
         let key = (image, scale.to_array().map(f32::to_bits));
         if let Some(t) = self.textures.get(&key) {
-            return Some(TextureSource::Decoded(t.clone()));
+            return Ok(TextureSource::Decoded(t.clone()));
         }
-        let source = self.document.images().nth(image)?.source();
+        let fail = |what: String| {
+            asset_err(
+                self.path,
+                AssetError::Invalid {
+                    item: format!("material \"{material}\""),
+                    problem: what,
+                },
+            )
+        };
+        let img = self
+            .document
+            .images()
+            .nth(image)
+            .ok_or_else(|| fail(format!("base colour image {image} does not exist")))?;
+        let label = match img.source() {
+            gltf::image::Source::Uri { uri, .. } => format!("image {image} (\"{uri}\")"),
+            gltf::image::Source::View { .. } => format!("image {image}"),
+        };
         let base = self.path.parent().unwrap_or(Path::new("."));
-        let data = gltf::image::Data::from_source(source, Some(base), self.buffers).ok()?;
-        let mut texture = Texture::from_image(&dynamic_image(data)?, true);
+        let data = gltf::image::Data::from_source(img.source(), Some(base), self.buffers)
+            .map_err(|e| fail(format!("base colour {label} cannot be read: {e}")))?;
+        let decoded = dynamic_image(data).ok_or_else(|| {
+            fail(format!(
+                "base colour {label} has a pixel format glint does not read"
+            ))
+        })?;
+        let mut texture = Texture::from_image(&decoded, true);
         if scale != Vec3::ONE {
             for t in &mut texture.texels {
                 *t *= scale;
@@ -201,7 +230,7 @@ impl Importer<'_> {
         }
         let texture = Arc::new(texture);
         self.textures.insert(key, texture.clone());
-        Some(TextureSource::Decoded(texture))
+        Ok(TextureSource::Decoded(texture))
     }
 }
 

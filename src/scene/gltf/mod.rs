@@ -56,8 +56,38 @@ struct Importer<'a> {
     report: ImportReport,
 }
 
+/// Deepest nesting of nodes accepted; real files nest a few dozen levels at most.
+const MAX_NODE_DEPTH: usize = 1024;
+
 /// Loads a glTF 2.0 file (`.gltf`, `.glb`, embedded) and spawns its scene into `world`.
+///
+/// The `gltf` crate panics on some malformed files (an attribute naming an accessor that
+/// does not exist, an image without a MIME type); such a panic becomes an error naming
+/// the file, so bad input never aborts glint.
 pub fn import_gltf(
+    world: &mut World,
+    path: &Path,
+    options: &ImportOptions,
+    warnings: &mut Vec<String>,
+) -> Result<ImportReport> {
+    let run =
+        std::panic::AssertUnwindSafe(|| import_gltf_unguarded(world, path, options, warnings));
+    // The default hook would print the dependency's panic before our error line.
+    let hook = std::panic::take_hook();
+    std::panic::set_hook(Box::new(|_| {}));
+    let result = std::panic::catch_unwind(run);
+    std::panic::set_hook(hook);
+    result.unwrap_or_else(|panic| {
+        let why = panic
+            .downcast_ref::<&str>()
+            .map(|s| s.to_string())
+            .or_else(|| panic.downcast_ref::<String>().cloned())
+            .unwrap_or_else(|| "unknown error".into());
+        Err(asset_err(path, AssetError::Malformed(why)))
+    })
+}
+
+fn import_gltf_unguarded(
     world: &mut World,
     path: &Path,
     options: &ImportOptions,
@@ -120,9 +150,7 @@ pub fn import_gltf(
         lights: Vec::new(),
         report: ImportReport::default(),
     };
-    for node in scene.nodes() {
-        imp.visit(world, &node, Mat4::IDENTITY, warnings)?;
-    }
+    imp.visit_scene(world, scene.nodes(), warnings)?;
     imp.spawn_lights(world, warnings);
     if !imp.emissive.is_empty() {
         warnings.push(format!(
@@ -142,13 +170,61 @@ pub fn import_gltf(
 }
 
 impl<'a> Importer<'a> {
+    /// Walks the scene's node trees depth first, children in order (the order entities
+    /// are spawned in), with an explicit stack: a file's nesting cannot overflow the call
+    /// stack, and a node reached twice (a cycle, or two parents) is an error naming it.
+    fn visit_scene(
+        &mut self,
+        world: &mut World,
+        roots: impl Iterator<Item = gltf::Node<'a>>,
+        warnings: &mut Vec<String>,
+    ) -> Result<()> {
+        let mut reached = vec![false; self.document.nodes().len()];
+        let mut stack: Vec<(gltf::Node<'a>, Mat4, usize)> =
+            roots.map(|n| (n, Mat4::IDENTITY, 0)).collect();
+        stack.reverse();
+        while let Some((node, parent, depth)) = stack.pop() {
+            let invalid = |problem: String| {
+                asset_err(
+                    self.path,
+                    AssetError::Invalid {
+                        item: format!("node {}", node_label(&node)),
+                        problem,
+                    },
+                )
+            };
+            match reached.get_mut(node.index()) {
+                Some(true) => {
+                    return Err(invalid(
+                        "is reached twice from the scene (a cycle, or a node with two parents)"
+                            .into(),
+                    ));
+                }
+                Some(r) => *r = true,
+                None => return Err(invalid("does not exist".into())),
+            }
+            if depth >= MAX_NODE_DEPTH {
+                return Err(invalid(format!(
+                    "is nested more than {MAX_NODE_DEPTH} levels deep"
+                )));
+            }
+            let file_from_node = self.visit(world, &node, parent, warnings)?;
+            let children: Vec<_> = node.children().collect();
+            for child in children.into_iter().rev() {
+                stack.push((child, file_from_node, depth + 1));
+            }
+        }
+        Ok(())
+    }
+
+    /// Spawns what one node holds; returns its file-from-node transform for its children.
     fn visit(
         &mut self,
         world: &mut World,
         node: &gltf::Node<'a>,
         parent: Mat4,
         warnings: &mut Vec<String>,
-    ) -> Result<()> {
+    ) -> Result<Mat4> {
         let local = Mat4::from_cols_array_2d(&node.transform().matrix());
         let file_from_node = parent * local;
         if !file_from_node.is_finite() {
@@ -170,10 +246,7 @@ impl<'a> Importer<'a> {
         if let Some(light) = node.light() {
             self.lights.push((light, world_from_node));
         }
-        for child in node.children() {
-            self.visit(world, &child, file_from_node, warnings)?;
-        }
-        Ok(())
+        Ok(file_from_node)
     }
 
     fn spawn_mesh(
@@ -213,7 +286,7 @@ impl<'a> Importer<'a> {
             };
             let material = match self.options.material {
                 Some(e) => e,
-                None => self.material(world, &primitive.material()),
+                None => self.material(world, &primitive.material())?,
             };
             self.report.triangles += data.triangles.len() as u64;
             self.report
