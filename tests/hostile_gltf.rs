@@ -120,3 +120,11 @@ fn a_corrupt_texture_is_an_error_naming_the_material_and_the_image() {
     gltf["images"] = json!([{"uri": "checker.png"}]);
     assert_clean_error(dir.path(), &gltf, "material \"checker\"");
 }
+
+#[test]
+fn a_buffer_view_longer_than_its_buffer_is_refused_not_read() {
+    let dir = temp_dir();
+    let mut gltf = fixture_in(dir.path());
+    gltf["bufferViews"][0]["byteLength"] = json!(100_000);
+    assert_clean_error(dir.path(), &gltf, "has no readable POSITION attribute");
+}
