@@ -102,7 +102,7 @@ pub enum AssetError {
     #[error("cannot read the OBJ file: {0}")]
     Obj(#[from] tobj::LoadError),
     /// The file's extension names no model format.
-    #[error("unknown model format (use .gltf, .glb or .obj)")]
+    #[error("not a format glint reads (scenes: .ron; models: .gltf, .glb, .obj)")]
     UnknownFormat,
     /// The glTF file requires an extension glint does not support.
     #[error("requires the glTF extension {0}, which glint does not support")]

@@ -350,3 +350,67 @@ fn an_interrupted_first_pass_does_not_replace_the_output() {
     assert!(dir.path().join("out.partial.png").exists(), "{stderr}");
     assert!(stderr.contains("out.partial.png"), "{stderr}");
 }
+
+/// A scene whose material "m" has `kd_texture: Some(texture)`.
+fn textured(texture: &str) -> String {
+    GOOD.replace(
+        r#""m": (kd: (0.5, 0.5, 0.5))"#,
+        &format!(r#""m": (kd: (0.5, 0.5, 0.5), kd_texture: Some("{texture}"))"#),
+    )
+}
+
+#[test]
+fn texture_errors_name_the_material_and_the_field() {
+    let dir = scene_dir(&textured("scene.ron"));
+    let err = common::load_error_in(dir.path());
+    assert!(
+        err.contains("material \"m\": kd_texture: ") && err.contains("is not an image glint reads"),
+        "{err}"
+    );
+    let dir = scene_dir(&textured("."));
+    let err = common::load_error_in(dir.path());
+    assert!(
+        err.contains("material \"m\": kd_texture: ") && err.contains("is a folder"),
+        "{err}"
+    );
+
+    // A corrupt PNG is found when the render decodes it; the error still names both.
+    let (ok, stderr, _dir) = {
+        let dir = scene_dir(&textured("bad.png"));
+        std::fs::write(dir.path().join("bad.png"), b"\x89PNG\r\n\x1a\n cut short").unwrap();
+        let out = Command::new(env!("CARGO_BIN_EXE_glint"))
+            .current_dir(dir.path())
+            .args(["render", "scene.ron", "-o", "out.png"])
+            .output()
+            .unwrap();
+        (
+            out.status.success(),
+            String::from_utf8_lossy(&out.stderr).into_owned(),
+            dir,
+        )
+    };
+    assert!(!ok);
+    assert!(
+        stderr.starts_with("error: bad.png: material \"m\": kd_texture: cannot be decoded"),
+        "{stderr}"
+    );
+}
+
+#[test]
+fn an_unknown_scene_extension_says_which_formats_are_read() {
+    let dir = scene_dir(GOOD);
+    std::fs::copy(dir.path().join("scene.ron"), dir.path().join("scene.ply")).unwrap();
+    let out = Command::new(env!("CARGO_BIN_EXE_glint"))
+        .current_dir(dir.path())
+        .args(["info", "scene.ply"])
+        .output()
+        .unwrap();
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert!(!out.status.success());
+    assert!(
+        stderr.starts_with(
+            "error: scene.ply: not a format glint reads (scenes: .ron; models: .gltf, .glb, .obj)"
+        ),
+        "{stderr}"
+    );
+}

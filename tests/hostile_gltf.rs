@@ -128,3 +128,15 @@ fn a_buffer_view_longer_than_its_buffer_is_refused_not_read() {
     gltf["bufferViews"][0]["byteLength"] = json!(100_000);
     assert_clean_error(dir.path(), &gltf, "has no readable POSITION attribute");
 }
+
+#[test]
+fn a_missing_buffer_file_is_an_error_naming_the_buffer_and_the_file() {
+    let dir = temp_dir();
+    let gltf = fixture_in(dir.path());
+    std::fs::remove_file(dir.path().join("glint_fixture.bin")).unwrap();
+    assert_clean_error(
+        dir.path(),
+        &gltf,
+        "buffer 0: file not found: glint_fixture.bin",
+    );
+}

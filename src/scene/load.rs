@@ -14,7 +14,7 @@ use super::import::ImportOptions;
 use super::obj::import_obj;
 use super::settings::Settings;
 use super::shapes;
-use crate::error::{GlintError, Result};
+use crate::error::{AssetError, GlintError, Result};
 
 /// Largest accepted image side, in pixels.
 pub const MAX_IMAGE_SIDE: u32 = 32768;
@@ -36,6 +36,13 @@ pub struct SceneSource {
 
 /// Reads and parses a scene file (no validation yet).
 pub fn read_scene(path: &Path) -> Result<SceneFile> {
+    let ext = path.extension().and_then(|e| e.to_str());
+    if ext.is_some_and(|e| !e.eq_ignore_ascii_case("ron")) {
+        return Err(GlintError::Asset {
+            path: path.to_owned(),
+            source: AssetError::UnknownFormat,
+        });
+    }
     let text = std::fs::read_to_string(path).map_err(|source| GlintError::Io {
         path: path.to_owned(),
         source,
@@ -178,10 +185,25 @@ fn validate_material(name: &str, d: &MaterialDesc, path: &Path) -> Result<Materi
         None => None,
         Some(file) => {
             let resolved = resolve(path, file);
+            if resolved.is_dir() {
+                return Err(c.err(
+                    "kd_texture",
+                    format!("{} is a folder, not an image file", resolved.display()),
+                ));
+            }
             if !resolved.is_file() {
                 return Err(c.err(
                     "kd_texture",
                     format!("file not found: {}", resolved.display()),
+                ));
+            }
+            if image::ImageFormat::from_path(&resolved).is_err() {
+                return Err(c.err(
+                    "kd_texture",
+                    format!(
+                        "{} is not an image glint reads (use .png, .jpg or .exr)",
+                        resolved.display()
+                    ),
                 ));
             }
             Some(TextureSource::File(resolved))

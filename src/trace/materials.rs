@@ -39,6 +39,8 @@ pub struct Materials {
     pub index_of: HashMap<Entity, u32>,
     /// Where each texture comes from, decoded by [`decode_textures`].
     pub sources: Vec<TextureSource>,
+    /// The name of the material each texture source belongs to, for error messages.
+    pub source_materials: Vec<String>,
     /// Whether lookups are bilinear.
     pub bilinear: bool,
 }
@@ -70,6 +72,7 @@ pub fn gather_materials(
         let texture = match (&m.kd_texture, settings.texture_mapping) {
             (Some(source), true) => {
                 table.sources.push(source.clone());
+                table.source_materials.push(m.name.clone());
                 Some(table.sources.len() as u32 - 1)
             }
             _ => None,
@@ -96,15 +99,18 @@ pub fn decode_textures(
 ) {
     let mut texels = 0;
     let mut textures = Vec::with_capacity(materials.sources.len());
-    for source in &materials.sources {
+    for (i, source) in materials.sources.iter().enumerate() {
         match source {
             TextureSource::Decoded(t) => textures.push(t.clone()),
             TextureSource::File(path) => match Texture::load(path, false) {
                 Ok(t) => textures.push(Arc::new(t)),
-                Err(source) => {
-                    errors.0.push(GlintError::Image {
+                Err(e) => {
+                    let material = materials.source_materials.get(i).map_or("", |n| n);
+                    errors.0.push(GlintError::Invalid {
                         path: path.clone(),
-                        source,
+                        entity: format!("material \"{material}\""),
+                        field: "kd_texture".into(),
+                        message: format!("cannot be decoded: {e}"),
                     });
                     textures.push(Arc::new(Texture {
                         width: 1,

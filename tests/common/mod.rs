@@ -84,6 +84,15 @@ pub fn sphere_under_area_light(size: u32, settings: &str) -> String {
 }
 
 /// The error message of a scene that must not load.
+/// The error of loading `dir/scene.ron`, which must not load.
+pub fn load_error_in(dir: &Path) -> String {
+    match Renderer::from_file(&dir.join("scene.ron"), &Default::default()) {
+        Ok(_) => panic!("scene loaded but should not have"),
+        Err(e) => e.to_string(),
+    }
+}
+
+/// The error of loading scene text that must not load.
 pub fn load_error(ron: &str) -> String {
     let path = Path::new("tests/bad.ron");
     match parse_scene(ron, path).and_then(|f| Renderer::from_scene(&f, path)) {

@@ -113,6 +113,23 @@ fn import_gltf_unguarded(
         gltf::Gltf::from_slice(&bytes).map_err(|e| asset_err(path, e))?;
     drop(bytes);
     let base = path.parent().unwrap_or(Path::new("."));
+    // The crate's own error for a missing buffer file names neither the buffer nor the file.
+    for buffer in document.buffers() {
+        if let gltf::buffer::Source::Uri(uri) = buffer.source()
+            && !uri.starts_with("data:")
+            // Percent-encoded names are left to the crate, which decodes them.
+            && !uri.contains('%')
+            && !base.join(uri).is_file()
+        {
+            return Err(asset_err(
+                path,
+                AssetError::Invalid {
+                    item: format!("buffer {}", buffer.index()),
+                    problem: format!("file not found: {}", base.join(uri).display()),
+                },
+            ));
+        }
+    }
     let buffers = gltf::import_buffers(&document, Some(base), blob)
         .map_err(|e| asset_err(path, AssetError::GltfBuffer(e)))?;
 
