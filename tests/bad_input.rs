@@ -414,3 +414,48 @@ fn an_unknown_scene_extension_says_which_formats_are_read() {
         "{stderr}"
     );
 }
+
+#[test]
+fn a_material_name_given_twice_is_an_error() {
+    let twice = GOOD.replace(
+        r#""m": (kd: (0.5, 0.5, 0.5))"#,
+        r#""m": (kd: (0.5, 0.5, 0.5)), "m": (kd: (1, 0, 0))"#,
+    );
+    let err = load_error(&twice);
+    assert!(err.contains("material \"m\" is defined twice"), "{err}");
+}
+
+#[test]
+fn a_missing_model_file_names_the_entity_and_field() {
+    let scene = GOOD.replace(
+        r#"Sphere((name: Some("ball"), center: (0, 0, 0), radius: 1, material: "m")),"#,
+        r#"Mesh((name: Some("model"), geometry: Gltf(path: "missing.glb"))),"#,
+    );
+    let dir = scene_dir(&scene);
+    let err = common::load_error_in(dir.path());
+    assert!(
+        err.contains("entities[0] (Mesh \"model\"): geometry: file not found: "),
+        "{err}"
+    );
+}
+
+#[test]
+fn a_scene_without_lights_or_geometry_is_warned_about() {
+    let dark = GOOD.replace(
+        r#"PointLight((position: (0, 2, 2), color: (1, 1, 1))),"#,
+        "",
+    );
+    let warnings = load(&dark).warnings();
+    assert!(
+        warnings.iter().any(|w| w.contains("no lights")),
+        "{warnings:?}"
+    );
+    let empty = r#"(camera: (position: (0, 0, 3), look_at: (0, 0, 0), fov_y: 40, width: 8, height: 8),
+        entities: [PointLight((position: (0, 2, 2), color: (1, 1, 1)))])"#;
+    let warnings = load(empty).warnings();
+    assert!(
+        warnings.iter().any(|w| w.contains("no geometry")),
+        "{warnings:?}"
+    );
+    assert!(load(GOOD).warnings().is_empty());
+}

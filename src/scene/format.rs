@@ -18,12 +18,43 @@ pub struct SceneFile {
     /// Render settings; missing fields take SPEC defaults.
     #[serde(default)]
     pub settings: Settings,
-    /// Named materials.
-    #[serde(default)]
+    /// Named materials; a name given twice is an error, not a silent overwrite.
+    #[serde(default, deserialize_with = "unique_names")]
     pub materials: BTreeMap<String, MaterialDesc>,
     /// Geometry and lights.
     #[serde(default)]
     pub entities: Vec<EntityDesc>,
+}
+
+/// Reads a map of named materials, refusing a name that appears twice (serde's own map
+/// keeps the last one without a word).
+fn unique_names<'de, D>(d: D) -> Result<BTreeMap<String, MaterialDesc>, D::Error>
+where
+    D: serde::Deserializer<'de>,
+{
+    struct Names;
+    impl<'de> serde::de::Visitor<'de> for Names {
+        type Value = BTreeMap<String, MaterialDesc>;
+        fn expecting(&self, f: &mut std::fmt::Formatter) -> std::fmt::Result {
+            f.write_str("a map of material names to materials")
+        }
+        fn visit_map<A: serde::de::MapAccess<'de>>(
+            self,
+            mut map: A,
+        ) -> Result<Self::Value, A::Error> {
+            let mut names = BTreeMap::new();
+            while let Some((name, material)) = map.next_entry::<String, MaterialDesc>()? {
+                if names.contains_key(&name) {
+                    return Err(serde::de::Error::custom(format!(
+                        "material \"{name}\" is defined twice"
+                    )));
+                }
+                names.insert(name, material);
+            }
+            Ok(names)
+        }
+    }
+    d.deserialize_map(Names)
 }
 
 /// The camera as written in RON.

@@ -176,6 +176,16 @@ pub fn validate_camera(d: &CameraDesc, path: &Path) -> Result<Camera> {
     })
 }
 
+/// `file` if it is a file; else an error naming the entity and `field` (a model's own
+/// read error would name only the missing file).
+fn existing_file(c: &Check, field: &str, file: PathBuf) -> Result<PathBuf> {
+    if file.is_file() {
+        Ok(file)
+    } else {
+        Err(c.err(field, format!("file not found: {}", file.display())))
+    }
+}
+
 fn validate_material(name: &str, d: &MaterialDesc, path: &Path) -> Result<Material> {
     let c = Check {
         path,
@@ -430,6 +440,23 @@ pub fn spawn_scene(world: &mut World, file: &SceneFile, path: &Path) -> Result<(
             }
         }
     }
+    let has = |light: bool| {
+        file.entities.iter().any(|e| {
+            let is_light = !matches!(e, EntityDesc::Mesh(_) | EntityDesc::Sphere(_));
+            is_light == light
+        })
+    };
+    if !has(false) {
+        spawner.warnings.push(format!(
+            "{}: the scene has no geometry: the image will be the background",
+            path.display()
+        ));
+    } else if !has(true) && file.settings.shading {
+        spawner.warnings.push(format!(
+            "{}: the scene has no lights: every surface will render black",
+            path.display()
+        ));
+    }
     world.insert_resource(file.settings.clone());
     world.insert_resource(SceneSource {
         path: path.to_owned(),
@@ -512,7 +539,8 @@ impl<'a> Spawner<'a> {
                     material: self.import_material(&c, &d.material)?,
                     scene: *scene,
                 };
-                import_gltf(world, &resolve(path, file), &options, &mut self.warnings)?;
+                let file = existing_file(&c, "geometry", resolve(path, file))?;
+                import_gltf(world, &file, &options, &mut self.warnings)?;
             }
             GeometryDesc::Obj { path: file } => {
                 let options = ImportOptions {
@@ -520,7 +548,8 @@ impl<'a> Spawner<'a> {
                     material: self.import_material(&c, &d.material)?,
                     scene: None,
                 };
-                import_obj(world, &resolve(path, file), &options, &mut self.warnings)?;
+                let file = existing_file(&c, "geometry", resolve(path, file))?;
+                import_obj(world, &file, &options, &mut self.warnings)?;
             }
             g => {
                 let data = shape_mesh(&c, g, &mut self.warnings)?;
