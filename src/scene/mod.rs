@@ -14,6 +14,7 @@ pub mod overrides;
 pub mod settings;
 pub mod shapes;
 pub mod texture;
+pub mod validate;
 
 pub use components::*;
 pub use load::{SceneSource, parse_scene, read_scene, spawn_scene};
