@@ -84,6 +84,9 @@ pub enum GlintError {
     /// The debug dump could not be encoded as RON.
     #[error("debug dump: {0}")]
     Dump(String),
+    /// The input asks for more memory than the machine has.
+    #[error(transparent)]
+    Memory(#[from] crate::memory::MemoryError),
 }
 
 /// Shorthand for results with [`GlintError`].

@@ -13,6 +13,7 @@ pub mod debug;
 pub mod error;
 pub mod film;
 pub mod info;
+pub mod memory;
 pub mod render;
 pub mod sampling;
 pub mod scene;

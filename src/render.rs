@@ -9,10 +9,11 @@ use bevy_ecs::prelude::*;
 
 use crate::error::{GlintError, Result};
 use crate::film::Film;
+use crate::memory;
 use crate::sampling::samples_taken;
 use crate::scene::format::SceneFile;
 use crate::scene::model::{SceneFormat, spawn_model};
-use crate::scene::{Camera, SceneSource, Settings, read_scene, spawn_scene};
+use crate::scene::{Camera, Mesh, SceneSource, Settings, read_scene, spawn_scene};
 use crate::schedule::{PassControl, add_render_schedules, run_pass, run_passes, run_prepare};
 use crate::stats::RenderStats;
 use crate::trace::plan::RenderPlan;
@@ -167,12 +168,33 @@ impl Renderer {
         }
         let start = *self.started.get_or_insert_with(Instant::now);
         let camera = self.camera().ok_or(GlintError::NoCamera)?;
-        self.world
-            .insert_resource(Film::new(camera.width, camera.height));
+        self.ensure_memory(&camera)?;
+        let film = Film::try_new(camera.width, camera.height)?;
+        self.world.insert_resource(film);
         self.prepared = true;
         let result = run_prepare(&mut self.world);
         self.prepare_time = start.elapsed();
         result
+    }
+
+    /// Refuses a render whose film and prepared geometry would not fit in memory.
+    fn ensure_memory(&mut self, camera: &Camera) -> Result<()> {
+        let mut meshes = self.world.query::<&Mesh>();
+        let triangles: u64 = meshes
+            .iter(&self.world)
+            .map(|m| m.data.triangles.len() as u64)
+            .sum();
+        let (w, h) = (camera.width as u64, camera.height as u64);
+        Ok(memory::ensure_fits(&[
+            (
+                format!("a {w}x{h} film"),
+                memory::product(&[w, h, Film::BYTES_PER_PIXEL]),
+            ),
+            (
+                format!("{triangles} triangles"),
+                memory::product(&[triangles, memory::BYTES_PER_PREPARED_TRIANGLE]),
+            ),
+        ])?)
     }
 
     /// Stops renders when `flag` is set (e.g. by Ctrl-C): checked before every

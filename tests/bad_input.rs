@@ -464,3 +464,23 @@ fn a_scene_without_lights_or_geometry_is_warned_about() {
     );
     assert!(load(GOOD).warnings().is_empty());
 }
+
+#[test]
+fn a_model_too_large_to_frame_blames_its_bounds_not_a_camera() {
+    let dir = temp_dir();
+    let obj = "v -3e38 -3e38 0\nv 3e38 -3e38 0\nv 0 3e38 0\nf 1 2 3\n";
+    std::fs::write(dir.path().join("huge.obj"), obj).unwrap();
+    let out = Command::new(env!("CARGO_BIN_EXE_glint"))
+        .current_dir(dir.path())
+        .args(["render", "huge.obj", "-o", "out.png"])
+        .output()
+        .unwrap();
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert_eq!(out.status.code(), Some(1), "{stderr}");
+    assert!(!stderr.contains("camera:"), "{stderr}");
+    assert!(
+        stderr.contains("huge.obj: bounds: the model spans") && stderr.contains("automatic camera"),
+        "{stderr}"
+    );
+    assert!(!dir.path().join("out.png").exists());
+}

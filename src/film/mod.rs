@@ -39,6 +39,34 @@ impl Film {
         }
     }
 
+    /// Bytes a `width` x `height` render holds per pixel: the film itself and the image
+    /// written from it.
+    pub const BYTES_PER_PIXEL: u64 = (size_of::<DVec3>() + size_of::<u32>() + 16) as u64;
+
+    /// An empty film, allocated fallibly: [`GlintError::Memory`] rather than an abort
+    /// when the allocator refuses (the estimate is checked before, in `Renderer::prepare`).
+    pub fn try_new(width: u32, height: u32) -> Result<Self> {
+        let n = width as usize * height as usize;
+        let refused = |_| {
+            GlintError::from(crate::memory::MemoryError::Refused {
+                what: format!("a {width}x{height} film"),
+                needed: n as u64 * Self::BYTES_PER_PIXEL,
+            })
+        };
+        let mut sum = Vec::new();
+        sum.try_reserve_exact(n).map_err(refused)?;
+        sum.resize(n, DVec3::ZERO);
+        let mut count = Vec::new();
+        count.try_reserve_exact(n).map_err(refused)?;
+        count.resize(n, 0);
+        Ok(Self {
+            width,
+            height,
+            sum,
+            count,
+        })
+    }
+
     /// The mean radiance of pixel `(x, y)` (black before any sample).
     pub fn pixel(&self, x: u32, y: u32) -> Vec3 {
         self.mean(y as usize * self.width as usize + x as usize)

@@ -16,6 +16,7 @@ use super::shapes;
 use super::validate::{Check, existing_file, validate_material, validate_transform};
 pub use super::validate::{resolve, validate_camera, validate_settings};
 use crate::error::{AssetError, GlintError, Result};
+use crate::memory;
 
 /// Largest accepted image side, in pixels.
 pub const MAX_IMAGE_SIDE: u32 = 32768;
@@ -155,12 +156,17 @@ fn shape_mesh(c: &Check, g: &GeometryDesc, warnings: &mut Vec<String>) -> Result
         }
         GeometryDesc::Cube => shapes::cube(),
         GeometryDesc::Plane { subdivisions } => {
-            shapes::plane(positive("geometry.subdivisions", *subdivisions, 4096)?)
+            let n = positive("geometry.subdivisions", *subdivisions, 4096)? as u64;
+            ensure_mesh_fits(c, (n + 1) * (n + 1), 2 * n * n)?;
+            shapes::plane(n as u32)
         }
-        GeometryDesc::UvSphere { segments, rings } => shapes::uv_sphere(
-            positive("geometry.segments", *segments, 1 << 14)?.max(3),
-            positive("geometry.rings", *rings, 1 << 14)?.max(2),
-        ),
+        GeometryDesc::UvSphere { segments, rings } => {
+            let segments = positive("geometry.segments", *segments, 1 << 14)?.max(3);
+            let rings = positive("geometry.rings", *rings, 1 << 14)?.max(2);
+            let (s, r) = (segments as u64, rings as u64);
+            ensure_mesh_fits(c, (s + 1) * (r + 1), 2 * s * r)?;
+            shapes::uv_sphere(segments, rings)
+        }
         GeometryDesc::Icosphere { subdivisions } => {
             if *subdivisions > 9 {
                 return Err(c.err(
@@ -172,6 +178,14 @@ fn shape_mesh(c: &Check, g: &GeometryDesc, warnings: &mut Vec<String>) -> Result
         }
         GeometryDesc::Gltf { .. } | GeometryDesc::Obj { .. } => unreachable!("handled by caller"),
     })
+}
+
+/// Refuses a generated shape the machine could not hold once prepared for rendering.
+fn ensure_mesh_fits(c: &Check, vertices: u64, triangles: u64) -> Result<()> {
+    let bytes = vertices * memory::BYTES_PER_VERTEX
+        + triangles * (memory::BYTES_PER_TRIANGLE + memory::BYTES_PER_PREPARED_TRIANGLE);
+    memory::ensure_fits(&[(format!("{triangles} triangles"), bytes)])
+        .map_err(|e| c.err("geometry", e.to_string()))
 }
 
 /// Rejects a mesh whose vertices overflow f32 once placed in the world (finite in the

@@ -16,7 +16,7 @@ use super::load::{MAX_IMAGE_SIDE, SceneSource, validate_camera, validate_setting
 use super::obj::import_obj;
 use super::overrides::Overrides;
 use super::settings::Settings;
-use crate::error::{AssetError, Result};
+use crate::error::{AssetError, GlintError, Result};
 
 // The importers' options and report, also reachable here, where models are imported.
 pub use super::import::{ImportOptions, ImportReport};
@@ -134,6 +134,9 @@ pub fn spawn_model(world: &mut World, path: &Path, overrides: &Overrides) -> Res
         None => {
             notes.push("camera: automatic, framing the bounds".to_owned());
             let c = framing_camera(centre, radius, width, file.camera.height);
+            if !c.position.is_finite() {
+                return Err(too_large_to_frame(path, &report, "an automatic camera"));
+            }
             CameraDesc {
                 position: c.position,
                 look_at: c.look_at,
@@ -150,6 +153,9 @@ pub fn spawn_model(world: &mut World, path: &Path, overrides: &Overrides) -> Res
         let eye = camera.position - centre;
         let up_left = Vec3::new(-0.5, 1.0, 0.0) * eye.length();
         let position = centre + (eye + up_left) * 1.2;
+        if !position.is_finite() {
+            return Err(too_large_to_frame(path, &report, "a default light"));
+        }
         world.spawn((
             Name::new("default light"),
             PointLight {
@@ -169,4 +175,20 @@ pub fn spawn_model(world: &mut World, path: &Path, overrides: &Overrides) -> Res
         notes,
     });
     Ok(())
+}
+
+/// The error for a model whose bounds overflow f32 once a camera or light is placed
+/// around them (coordinates near ±3e38 are finite, their distances are not).
+fn too_large_to_frame(path: &Path, report: &ImportReport, what: &str) -> GlintError {
+    let (lo, hi) = report.bounds.unwrap_or_default();
+    asset_err(
+        path,
+        AssetError::Invalid {
+            item: "bounds".to_owned(),
+            problem: format!(
+                "the model spans {lo} to {hi}, too far to place {what} around it \
+                 (coordinates must stay within about ±1e37)"
+            ),
+        },
+    )
 }

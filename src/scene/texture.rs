@@ -67,13 +67,40 @@ impl Texture {
     }
 
     /// Loads and decodes a file (PNG or JPEG).
-    pub fn load(path: &std::path::Path, srgb: bool) -> Result<Texture, image::ImageError> {
-        // Guess from the content as well as the extension, so a misnamed file still loads.
-        let img = image::ImageReader::open(path)?
-            .with_guessed_format()?
-            .decode()?;
+    pub fn load(path: &std::path::Path, srgb: bool) -> Result<Texture, TextureError> {
+        let bytes = std::fs::read(path).map_err(image::ImageError::IoError)?;
+        Texture::decode(&bytes, srgb)
+    }
+
+    /// Decodes an encoded image (PNG, JPEG, ...; the format is guessed from the content,
+    /// so a misnamed file still loads), refusing one the machine could not hold: a small
+    /// PNG can declare 20000x20000 texels, which take 12 bytes each here.
+    pub fn decode(bytes: &[u8], srgb: bool) -> Result<Texture, TextureError> {
+        use image::ImageDecoder;
+        let decoder = image::ImageReader::new(std::io::Cursor::new(bytes))
+            .with_guessed_format()
+            .map_err(image::ImageError::IoError)?
+            .into_decoder()?;
+        let (w, h) = decoder.dimensions();
+        // The decoded image, its 32-bit float copy and the texels.
+        let needed = decoder
+            .total_bytes()
+            .saturating_add(crate::memory::product(&[w as u64, h as u64, 24]));
+        crate::memory::ensure_fits(&[(format!("a {w}x{h} texture"), needed)])?;
+        let img = image::DynamicImage::from_decoder(decoder)?;
         Ok(Texture::from_image(&img, srgb))
     }
+}
+
+/// Why a texture could not be decoded.
+#[derive(Debug, thiserror::Error)]
+pub enum TextureError {
+    /// The file is not an image glint reads, or is corrupt.
+    #[error(transparent)]
+    Image(#[from] image::ImageError),
+    /// The image is too large for the memory available.
+    #[error(transparent)]
+    Memory(#[from] crate::memory::MemoryError),
 }
 
 #[cfg(test)]

@@ -50,36 +50,42 @@ fn wrap_mode(m: WrappingMode) -> WrapMode {
     }
 }
 
-/// Converts gltf's decoded image to an `image` crate image (gltf keeps raw bytes).
-fn dynamic_image(data: gltf::image::Data) -> Option<image::DynamicImage> {
-    use gltf::image::Format;
-    use image::{DynamicImage, ImageBuffer};
-    let (w, h) = (data.width, data.height);
-    let u16s = |b: &[u8]| -> Vec<u16> {
-        b.chunks_exact(2)
-            .map(|c| u16::from_ne_bytes([c[0], c[1]]))
-            .collect()
-    };
-    let f32s = |b: &[u8]| -> Vec<f32> {
-        b.chunks_exact(4)
-            .map(|c| f32::from_ne_bytes([c[0], c[1], c[2], c[3]]))
-            .collect()
-    };
-    let p = data.pixels;
-    Some(match data.format {
-        Format::R8 => DynamicImage::ImageLuma8(ImageBuffer::from_raw(w, h, p)?),
-        Format::R8G8 => DynamicImage::ImageLumaA8(ImageBuffer::from_raw(w, h, p)?),
-        Format::R8G8B8 => DynamicImage::ImageRgb8(ImageBuffer::from_raw(w, h, p)?),
-        Format::R8G8B8A8 => DynamicImage::ImageRgba8(ImageBuffer::from_raw(w, h, p)?),
-        Format::R16 => DynamicImage::ImageLuma16(ImageBuffer::from_raw(w, h, u16s(&p))?),
-        Format::R16G16 => DynamicImage::ImageLumaA16(ImageBuffer::from_raw(w, h, u16s(&p))?),
-        Format::R16G16B16 => DynamicImage::ImageRgb16(ImageBuffer::from_raw(w, h, u16s(&p))?),
-        Format::R16G16B16A16 => DynamicImage::ImageRgba16(ImageBuffer::from_raw(w, h, u16s(&p))?),
-        Format::R32G32B32FLOAT => DynamicImage::ImageRgb32F(ImageBuffer::from_raw(w, h, f32s(&p))?),
-        Format::R32G32B32A32FLOAT => {
-            DynamicImage::ImageRgba32F(ImageBuffer::from_raw(w, h, f32s(&p))?)
+/// The encoded bytes of a glTF image (a buffer view, a `data:` URI or a file beside the
+/// glTF), read here rather than by the `gltf` crate so that glint decodes them itself,
+/// with its memory check, and no index is followed before it is checked.
+fn encoded_image<'a>(
+    source: gltf::image::Source<'_>,
+    base: &Path,
+    buffers: &'a [gltf::buffer::Data],
+) -> std::result::Result<std::borrow::Cow<'a, [u8]>, String> {
+    use std::borrow::Cow;
+    match source {
+        gltf::image::Source::View { view, .. } => {
+            let end = view.offset().saturating_add(view.length());
+            buffers
+                .get(view.buffer().index())
+                .and_then(|b| b.0.get(view.offset()..end))
+                .map(Cow::Borrowed)
+                .ok_or_else(|| "lies outside its buffer".to_owned())
         }
-    })
+        gltf::image::Source::Uri { uri, .. } => {
+            if let Some(data) = uri.strip_prefix("data:") {
+                let payload = data.split_once(";base64,").map_or(data, |(_, p)| p);
+                return base64::decode(payload)
+                    .map(Cow::Owned)
+                    .map_err(|e| format!("has a data URI that is not base64: {e}"));
+            }
+            let relative = uri
+                .strip_prefix("file://")
+                .or_else(|| uri.strip_prefix("file:"))
+                .map(Cow::Borrowed)
+                .unwrap_or_else(|| urlencoding::decode(uri).unwrap_or(Cow::Borrowed(uri)));
+            let file = base.join(&*relative);
+            std::fs::read(&file)
+                .map(Cow::Owned)
+                .map_err(|e| format!("cannot be read from {}: {e}", file.display()))
+        }
+    }
 }
 
 /// The KHR_texture_transform matrix (glTF's uv convention): translation * rotation * scale.
@@ -211,18 +217,16 @@ impl Importer<'_> {
             .nth(image)
             .ok_or_else(|| fail(format!("base colour image {image} does not exist")))?;
         let label = match img.source() {
-            gltf::image::Source::Uri { uri, .. } => format!("image {image} (\"{uri}\")"),
-            gltf::image::Source::View { .. } => format!("image {image}"),
+            gltf::image::Source::Uri { uri, .. } if !uri.starts_with("data:") => {
+                format!("image {image} (\"{uri}\")")
+            }
+            _ => format!("image {image}"),
         };
         let base = self.path.parent().unwrap_or(Path::new("."));
-        let data = gltf::image::Data::from_source(img.source(), Some(base), self.buffers)
-            .map_err(|e| fail(format!("base colour {label} cannot be read: {e}")))?;
-        let decoded = dynamic_image(data).ok_or_else(|| {
-            fail(format!(
-                "base colour {label} has a pixel format glint does not read"
-            ))
-        })?;
-        let mut texture = Texture::from_image(&decoded, true);
+        let bytes = encoded_image(img.source(), base, self.buffers)
+            .map_err(|e| fail(format!("base colour {label} {e}")))?;
+        let mut texture = Texture::decode(&bytes, true)
+            .map_err(|e| fail(format!("base colour {label} cannot be decoded: {e}")))?;
         if scale != Vec3::ONE {
             for t in &mut texture.texels {
                 *t *= scale;
