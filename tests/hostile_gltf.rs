@@ -81,6 +81,23 @@ fn a_node_cycle_is_an_error_naming_the_node() {
     assert_clean_error(dir.path(), &gltf, "is reached twice");
 }
 
+/// Shared children would let 40 nodes draw 2^20 instances: a 2 KB file that once kept
+/// glint busy for minutes. A node has one parent, so instances are bounded by the file.
+#[test]
+fn nodes_shared_between_parents_cannot_multiply_instances() {
+    let dir = temp_dir();
+    let mut gltf = fixture_in(dir.path());
+    let levels = 20;
+    let mut nodes: Vec<Value> = (0..2 * (levels - 1))
+        .map(|i| json!({"children": [2 * (i / 2) + 2, 2 * (i / 2) + 3]}))
+        .collect();
+    nodes.extend([json!({"mesh": 0}), json!({"mesh": 0})]);
+    gltf["nodes"] = Value::Array(nodes);
+    gltf["scenes"] = json!([{"nodes": [0, 1]}]);
+    gltf["scene"] = json!(0);
+    assert_clean_error(dir.path(), &gltf, "is reached twice");
+}
+
 #[test]
 fn a_200000_deep_node_chain_is_an_error_not_a_stack_overflow() {
     let dir = temp_dir();

@@ -136,7 +136,22 @@ pub fn cached_reference(
         renderer.samples_per_pixel(),
         path.display()
     ));
-    let summary = renderer.render(None, &mut |_| {})?;
+    // A 4096-spp reference takes minutes: say how long, at every tenth of the way.
+    let total = width as u64 * height as u64 * renderer.samples_per_pixel() as u64;
+    let (start, mut done, mut next_tenth) = (std::time::Instant::now(), 0u64, 1u64);
+    let summary = renderer.render(None, &mut |pixels| {
+        done += pixels;
+        if done * 10 >= next_tenth * total && done < total {
+            next_tenth = done * 10 / total + 1;
+            let seconds = start.elapsed().as_secs_f64();
+            let left = seconds * (total - done) as f64 / done as f64;
+            log(&format!(
+                "reference: {}% done in {seconds:.0} s, about {} left",
+                done * 100 / total,
+                duration_words(left)
+            ));
+        }
+    })?;
     if summary.interrupted {
         return Err(GlintError::Reference(
             "interrupted while rendering the reference; nothing cached".into(),
@@ -162,6 +177,17 @@ pub fn cached_reference(
     ))
 }
 
+/// `42 s`, `3.5 min`, `1.2 h`.
+fn duration_words(seconds: f64) -> String {
+    if seconds < 90.0 {
+        format!("{seconds:.0} s")
+    } else if seconds < 5400.0 {
+        format!("{:.1} min", seconds / 60.0)
+    } else {
+        format!("{:.1} h", seconds / 3600.0)
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -181,5 +207,12 @@ mod tests {
             ..Overrides::default()
         };
         assert_ne!(base, cache_path(scene, b"a", &o2, 64));
+    }
+
+    #[test]
+    fn durations_read_for_people() {
+        assert_eq!(duration_words(42.4), "42 s");
+        assert_eq!(duration_words(210.0), "3.5 min");
+        assert_eq!(duration_words(4.0 * 3600.0), "4.0 h");
     }
 }
