@@ -99,7 +99,10 @@ fn ctrl_c_writes_the_image_so_far() {
         .output()
         .is_err()
     {
-        eprintln!("skipped: no `kill` command to send SIGINT");
+        common::skip(
+            "ctrl_c_writes_the_image_so_far",
+            "no `kill` command to send SIGINT",
+        );
         return;
     }
     let tmp = temp_dir();

@@ -25,9 +25,12 @@ pub fn shared_assets(test: &str) -> Option<PathBuf> {
     if dir.join("README.md").is_file() {
         Some(dir)
     } else {
-        println!(
-            "{test}: skipped: {} not found (third-party assets are not in the repository)",
-            dir.display()
+        super::skip(
+            test,
+            &format!(
+                "{} not found (third-party assets are not in the repository)",
+                dir.display()
+            ),
         );
         None
     }

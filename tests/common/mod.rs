@@ -124,3 +124,22 @@ pub fn quad(z: f32, material: &str) -> String {
         "Mesh((material: Some(\"{material}\"), geometry: Parallelogram(origin: (-1, -1, {z}), edge_u: (2, 0, 0), edge_v: (0, 2, 0))))"
     )
 }
+
+/// Skips (returns from) a test with a line that libtest does not capture: the test still
+/// reports "ok", so the line and its running count are what show it did not run.
+pub fn skip(test: &str, why: &str) {
+    use std::io::Write;
+    use std::sync::atomic::{AtomicUsize, Ordering};
+    static SKIPPED: AtomicUsize = AtomicUsize::new(0);
+    let n = SKIPPED.fetch_add(1, Ordering::Relaxed) + 1;
+    let binary = std::env::args().next().unwrap_or_default();
+    let binary = Path::new(&binary)
+        .file_name()
+        .map_or("", |f| f.to_str().unwrap_or(""))
+        .split('-')
+        .next()
+        .unwrap_or("")
+        .to_owned();
+    // Writing to the handle, not through eprintln!, bypasses libtest's capture.
+    let _ = writeln!(std::io::stderr(), "SKIPPED ({n} in {binary}) {test}: {why}");
+}
