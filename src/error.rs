@@ -124,9 +124,15 @@ pub enum AssetError {
     /// A model rendered directly has no triangles.
     #[error("the file has no triangles to render")]
     NoTriangles,
-    /// The glTF reader gave up on the file (a panic inside the `gltf` crate, caught).
-    #[error("malformed glTF file: {0}")]
-    Malformed(String),
+    /// The glTF or OBJ reader gave up on the file (a panic inside the `gltf` or `tobj`
+    /// crate, caught).
+    #[error("malformed {format} file: {why}")]
+    Malformed {
+        /// "glTF" or "OBJ".
+        format: &'static str,
+        /// The reader's message.
+        why: String,
+    },
     /// A node, mesh or primitive holds data glint cannot use.
     #[error("{item}: {problem}")]
     Invalid {

@@ -7,7 +7,7 @@ use bevy_ecs::prelude::*;
 use glam::{Affine3A, Vec3};
 
 use super::components::MeshData;
-use crate::error::{AssetError, GlintError};
+use crate::error::{AssetError, GlintError, Result};
 
 /// The error for what is wrong with the asset file at `path`.
 pub fn asset_err(path: &Path, error: impl Into<AssetError>) -> GlintError {
@@ -15,6 +15,29 @@ pub fn asset_err(path: &Path, error: impl Into<AssetError>) -> GlintError {
         path: path.to_owned(),
         source: error.into(),
     }
+}
+
+/// Runs an importer behind a guard: the `gltf` and `tobj` crates panic on some malformed
+/// files (an attribute naming an accessor that does not exist, an MTL colour with two
+/// components), and such a panic becomes an error naming the file instead of aborting.
+pub fn guarded<T>(
+    path: &Path,
+    format: &'static str,
+    import: impl FnOnce() -> Result<T>,
+) -> Result<T> {
+    // The default hook would print the dependency's panic before our error line.
+    let hook = std::panic::take_hook();
+    std::panic::set_hook(Box::new(|_| {}));
+    let result = std::panic::catch_unwind(std::panic::AssertUnwindSafe(import));
+    std::panic::set_hook(hook);
+    result.unwrap_or_else(|panic| {
+        let why = panic
+            .downcast_ref::<&str>()
+            .map(|s| s.to_string())
+            .or_else(|| panic.downcast_ref::<String>().cloned())
+            .unwrap_or_else(|| "unknown error".into());
+        Err(asset_err(path, AssetError::Malformed { format, why }))
+    })
 }
 
 /// How an imported file is placed into the world.

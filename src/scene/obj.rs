@@ -9,7 +9,7 @@ use bevy_ecs::prelude::*;
 use glam::{Vec2, Vec3};
 
 use super::components::*;
-use super::import::{ImportOptions, ImportReport, asset_err, mesh_bounds};
+use super::import::{ImportOptions, ImportReport, asset_err, guarded, mesh_bounds};
 use super::shapes;
 use super::texture::WrapMode;
 use crate::error::{AssetError, Result};
@@ -40,8 +40,20 @@ pub fn find_file_case_insensitive(dir: &Path, name: &str) -> Option<PathBuf> {
     current.is_file().then_some(current)
 }
 
-/// Loads an OBJ file (and its MTL files) and spawns its meshes and materials into `world`.
+/// Loads an OBJ file (and its MTL files) and spawns its meshes and materials into `world`;
+/// a panic inside `tobj` on a malformed file becomes an error naming the file.
 pub fn import_obj(
+    world: &mut World,
+    path: &Path,
+    options: &ImportOptions,
+    warnings: &mut Vec<String>,
+) -> Result<ImportReport> {
+    guarded(path, "OBJ", || {
+        import_obj_unguarded(world, path, options, warnings)
+    })
+}
+
+fn import_obj_unguarded(
     world: &mut World,
     path: &Path,
     options: &ImportOptions,

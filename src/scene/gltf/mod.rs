@@ -12,7 +12,7 @@ use gltf::khr_lights_punctual::Kind as LightKind;
 use gltf::mesh::Mode;
 
 use super::components::*;
-use super::import::{ImportOptions, ImportReport, ImportedCamera, asset_err, mesh_bounds};
+use super::import::{ImportOptions, ImportReport, ImportedCamera, asset_err, guarded, mesh_bounds};
 use super::shapes;
 use super::texture::Texture;
 use crate::error::{AssetError, GlintError, Result};
@@ -61,29 +61,16 @@ const MAX_NODE_DEPTH: usize = 1024;
 
 /// Loads a glTF 2.0 file (`.gltf`, `.glb`, embedded) and spawns its scene into `world`.
 ///
-/// The `gltf` crate panics on some malformed files (an attribute naming an accessor that
-/// does not exist, an image without a MIME type); such a panic becomes an error naming
-/// the file, so bad input never aborts glint.
+/// A panic inside the `gltf` crate on a malformed file becomes an error naming the file
+/// (see [`guarded`]).
 pub fn import_gltf(
     world: &mut World,
     path: &Path,
     options: &ImportOptions,
     warnings: &mut Vec<String>,
 ) -> Result<ImportReport> {
-    let run =
-        std::panic::AssertUnwindSafe(|| import_gltf_unguarded(world, path, options, warnings));
-    // The default hook would print the dependency's panic before our error line.
-    let hook = std::panic::take_hook();
-    std::panic::set_hook(Box::new(|_| {}));
-    let result = std::panic::catch_unwind(run);
-    std::panic::set_hook(hook);
-    result.unwrap_or_else(|panic| {
-        let why = panic
-            .downcast_ref::<&str>()
-            .map(|s| s.to_string())
-            .or_else(|| panic.downcast_ref::<String>().cloned())
-            .unwrap_or_else(|| "unknown error".into());
-        Err(asset_err(path, AssetError::Malformed(why)))
+    guarded(path, "glTF", || {
+        import_gltf_unguarded(world, path, options, warnings)
     })
 }
 
