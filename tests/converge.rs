@@ -206,3 +206,22 @@ fn supplied_reference_equal_to_the_render_gives_zero_error() {
     assert_eq!(last.error.rmse, 0.0);
     assert!(report.curves[0].passes[0].error.rmse > 0.0);
 }
+
+/// A 4096-spp reference takes minutes: its render reports how far it is and the time left.
+#[test]
+fn the_reference_render_reports_progress_and_time_left() {
+    let tmp = scene_dir(&scene_text("pixel_samples: 4, shadow_samples: 1, seed: 5"));
+    let mut lines = Vec::new();
+    run(&options(&tmp.path().join("scene.ron"), 64, 1), &mut |l| {
+        lines.push(l.to_owned())
+    })
+    .unwrap();
+    let progress: Vec<_> = lines
+        .iter()
+        .filter(|l| l.starts_with("reference: ") && l.contains("% done") && l.contains("left"))
+        .collect();
+    assert!(progress.len() >= 5, "{lines:#?}");
+    let done = lines.iter().position(|l| l.starts_with("reference done"));
+    let last = lines.iter().rposition(|l| l.starts_with("reference: "));
+    assert!(last < done, "{lines:#?}");
+}
