@@ -1,5 +1,6 @@
 //! The film: accumulated radiance per pixel, image output, and error metrics.
 
+pub mod estimate;
 pub mod metrics;
 pub mod text;
 
@@ -14,7 +15,8 @@ use crate::error::{GlintError, Result};
 use crate::stats::{RenderStats, Stage};
 use crate::trace::wavefront::SampleRadiance;
 
-/// Accumulated radiance: a sum and a sample count per pixel, row 0 at the top.
+/// Accumulated radiance: a sum and a sample count per pixel, row 0 at the top, and the
+/// moments its error estimate needs (see [`estimate`]).
 #[derive(Resource, Clone, Debug, Default, PartialEq)]
 pub struct Film {
     /// Width in pixels.
@@ -25,6 +27,12 @@ pub struct Film {
     pub sum: Vec<DVec3>,
     /// Number of finite samples of each pixel.
     pub count: Vec<u32>,
+    /// Sum of squared deviations from the mean of each pixel's samples (Welford).
+    pub m2: Vec<DVec3>,
+    /// Sum of the finite samples of odd sample index (the second replica).
+    pub replica_sum: Vec<DVec3>,
+    /// Number of finite samples of odd sample index.
+    pub replica_count: Vec<u32>,
 }
 
 impl Film {
@@ -36,6 +44,9 @@ impl Film {
             height,
             sum: vec![DVec3::ZERO; n],
             count: vec![0; n],
+            m2: vec![DVec3::ZERO; n],
+            replica_sum: vec![DVec3::ZERO; n],
+            replica_count: vec![0; n],
         }
     }
 
