@@ -128,6 +128,24 @@ fn sobol_renders_are_the_same_for_any_pass_split() {
     assert_eq!(fixed.film(), stepwise.film());
 }
 
+#[test]
+fn low_discrepancy_samplers_are_bit_identical_across_thread_counts() {
+    for sampler in ["sobol", "stratified"] {
+        let text = sphere_under_area_light(
+            40,
+            &format!("pixel_samples: 4, shadow_samples: 3, sampler: {sampler}"),
+        );
+        let run = |threads: usize| {
+            let pool = rayon::ThreadPoolBuilder::new()
+                .num_threads(threads)
+                .build()
+                .unwrap();
+            pool.install(|| render(&text).film().clone())
+        };
+        assert!(run(1) == run(2), "{sampler}: 1- and 2-thread films differ");
+    }
+}
+
 /// Renders the area-light scene with `sampler` until `rule` says stop.
 fn render_until(
     sampler: &str,

@@ -264,6 +264,57 @@ mod tests {
     }
 
     #[test]
+    fn a_shading_points_light_samples_are_stratified() {
+        use crate::sampling::sobol::is_net;
+        let slot = (1, 0, 3);
+        for seed in [0, 5] {
+            for pixel in [0, 17, 4000] {
+                for kind in [SamplerKind::Stratified, SamplerKind::Sobol] {
+                    let s = Sampler::with_kind(seed, kind);
+                    for sample in 0..4 {
+                        let points: Vec<[f32; 2]> = (0..16)
+                            .map(|k| s.light2(pixel, sample, slot, k, 16).to_array())
+                            .collect();
+                        assert!(is_net(&points, 4), "{kind:?} pixel {pixel} sample {sample}");
+                        let line: Vec<f32> = (0..16)
+                            .map(|k| s.light1(pixel, sample, slot, k, 16))
+                            .collect();
+                        let mut cells = [0; 16];
+                        line.iter().for_each(|&u| cells[(u * 16.0) as usize] += 1);
+                        assert!(cells.iter().all(|&c| c == 1), "{kind:?} 1D");
+                    }
+                }
+                // Sobol': the even passes (one replica) together are stratified too, and
+                // so are their pixel offsets.
+                let s = Sampler::with_kind(seed, SamplerKind::Sobol);
+                let over_passes: Vec<[f32; 2]> = (0..8)
+                    .flat_map(|pass| (0..16).map(move |k| (2 * pass, k)))
+                    .map(|(sample, k)| s.light2(pixel, sample, slot, k, 16).to_array())
+                    .collect();
+                assert!(is_net(&over_passes, 7));
+                let offsets: Vec<[f32; 2]> = (0..32)
+                    .map(|j| s.pixel2(pixel, 2 * j + 1).to_array())
+                    .collect();
+                assert!(is_net(&offsets, 5));
+            }
+        }
+    }
+
+    #[test]
+    fn independent_light_samples_are_the_old_dimensions() {
+        let s = Sampler::new(4);
+        assert_eq!(
+            s.light1(3, 2, (1, 0, 5), 7, 9),
+            s.get1(3, 2, light_dim(1, 0, 5, 7))
+        );
+        assert_eq!(
+            s.light2(3, 2, (1, 0, 5), 7, 9),
+            s.get2(3, 2, light_dim(1, 0, 5, 7))
+        );
+        assert_eq!(s.pixel2(3, 2), s.get2(3, 2, DIM_PIXEL));
+    }
+
+    #[test]
     fn light_dims_outside_packed_range() {
         let a = light_dim(100, 0, 0, 0);
         let b = light_dim(0, 0, 100_000, 0);

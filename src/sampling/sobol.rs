@@ -91,24 +91,25 @@ pub fn sobol_2d(index: u32, seed: u32) -> [f32; 2] {
     ]
 }
 
+/// Whether `points` (2^m of them) put exactly one point in every elementary interval
+/// `[a 2^-i, (a+1) 2^-i) x [b 2^-(m-i), (b+1) 2^-(m-i))`, for tests.
+#[cfg(test)]
+pub(crate) fn is_net(points: &[[f32; 2]], m: u32) -> bool {
+    (0..=m).all(|i| {
+        let (nx, ny) = (1usize << i, 1usize << (m - i));
+        let mut cells = vec![0u32; nx * ny];
+        for p in points {
+            let cx = (f64::from(p[0]) * nx as f64) as usize;
+            let cy = (f64::from(p[1]) * ny as f64) as usize;
+            cells[cy * nx + cx] += 1;
+        }
+        cells.iter().all(|&c| c == 1)
+    })
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
-
-    /// Whether `points` (2^m of them) put exactly one point in every elementary
-    /// interval `[a 2^-i, (a+1) 2^-i) x [b 2^-(m-i), (b+1) 2^-(m-i))`.
-    fn is_net(points: &[[f32; 2]], m: u32) -> bool {
-        (0..=m).all(|i| {
-            let (nx, ny) = (1usize << i, 1usize << (m - i));
-            let mut cells = vec![0u32; nx * ny];
-            for p in points {
-                let cx = (f64::from(p[0]) * nx as f64) as usize;
-                let cy = (f64::from(p[1]) * ny as f64) as usize;
-                cells[cy * nx + cx] += 1;
-            }
-            cells.iter().all(|&c| c == 1)
-        })
-    }
 
     #[test]
     fn unscrambled_dimensions_are_the_known_sequence() {
