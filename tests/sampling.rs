@@ -8,6 +8,7 @@ use std::time::Duration;
 use common::*;
 use glam::DVec3;
 use glint::film::estimate::EstimateMethod;
+use glint::film::metrics::image_error;
 use glint::render::{Ended, MIN_TARGET_SPP, StopRule};
 
 /// A wall at z = 0 seen through one pixel at its centre from (2, 0, 3), lit with shading
@@ -143,6 +144,38 @@ fn low_discrepancy_samplers_are_bit_identical_across_thread_counts() {
             pool.install(|| render(&text).film().clone())
         };
         assert!(run(1) == run(2), "{sampler}: 1- and 2-thread films differ");
+    }
+}
+
+#[test]
+fn the_estimate_is_within_a_quarter_of_the_true_rmse_at_16_spp() {
+    let scene = |sampler: &str, spp: u32, seed: u64| {
+        render(&sphere_under_area_light(
+            32,
+            &format!(
+                "pixel_samples: {spp}, pixel_sampling: uniform, shadow_samples: 2, sampler: {sampler}, seed: {seed}"
+            ),
+        ))
+    };
+    let reference = scene("sobol", 512, 99);
+    let reference_mse = reference.error_estimate().unwrap().rmse.powi(2);
+    for sampler in ["independent", "stratified", "sobol"] {
+        // Four seeds: the MSE of one small image varies by about 10% (a few edge
+        // pixels carry much of it).
+        let (mut estimated, mut measured) = (0.0, 0.0);
+        for seed in 1..=4 {
+            let r = scene(sampler, 16, seed);
+            estimated += r.error_estimate().unwrap().rmse.powi(2);
+            measured += image_error(&r.film().image(), &reference.film().image())
+                .rmse
+                .powi(2);
+        }
+        let ratio = (estimated / (measured - 4.0 * reference_mse)).sqrt();
+        eprintln!("{sampler}: estimate / truth = {ratio:.3}");
+        assert!(
+            (0.75..=1.25).contains(&ratio),
+            "{sampler}: estimate / truth = {ratio}"
+        );
     }
 }
 
