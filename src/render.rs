@@ -9,11 +9,14 @@ use bevy_ecs::prelude::*;
 
 use crate::error::{GlintError, Result};
 use crate::film::Film;
+use crate::film::estimate::{ErrorEstimate, EstimateMethod};
 use crate::memory;
-use crate::sampling::samples_taken;
+use crate::sampling::{pixel_mode, samples_per_pixel};
 use crate::scene::format::SceneFile;
 use crate::scene::model::{SceneFormat, spawn_model};
-use crate::scene::{Camera, Mesh, SceneSource, Settings, read_scene, spawn_scene};
+use crate::scene::{
+    Camera, Mesh, PixelSampling, SamplerKind, SceneSource, Settings, read_scene, spawn_scene,
+};
 use crate::schedule::{PassControl, add_render_schedules, run_pass, run_passes, run_prepare};
 use crate::stats::RenderStats;
 use crate::trace::plan::RenderPlan;
@@ -39,7 +42,54 @@ pub struct RenderSummary {
     pub notes: Vec<String>,
     /// Whether the interrupt flag stopped the render before its last pass.
     pub interrupted: bool,
+    /// The film's estimate of its own error (`None` below two samples per pixel).
+    pub error: Option<ErrorEstimate>,
+    /// What ended the run.
+    pub ended: Ended,
 }
+
+/// What ended a render.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub enum Ended {
+    /// Every sample of `pixel_samples` was taken.
+    #[default]
+    AllSamples,
+    /// The time budget was spent.
+    Time,
+    /// The error estimate reached the target.
+    Target,
+    /// The interrupt flag (Ctrl-C).
+    Interrupt,
+}
+
+/// When a render stops: at `pixel_samples` or `time`; with a target, the passes go on
+/// past `pixel_samples` until the error estimate reaches it or `time` is spent.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct StopRule {
+    /// Time budget (checked after each pass).
+    pub time: Option<Duration>,
+    /// Estimated RMSE at which to stop.
+    pub target_rmse: Option<f64>,
+    /// Estimated relative RMSE, `sqrt(relMSE)`, at which to stop.
+    pub target_rel_error: Option<f64>,
+}
+
+impl StopRule {
+    /// Whether `estimate` meets every target given (and there is a target).
+    pub fn reached(&self, estimate: Option<&ErrorEstimate>) -> bool {
+        if self.target_rmse.is_none() && self.target_rel_error.is_none() {
+            return false;
+        }
+        estimate.is_some_and(|e| {
+            self.target_rmse.is_none_or(|t| e.rmse <= t)
+                && self.target_rel_error.is_none_or(|t| e.rel_mse.sqrt() <= t)
+        })
+    }
+}
+
+/// A target is never judged on fewer samples per pixel: below this the estimate is too
+/// noisy to trust, and stopping on a lucky low one would be a biased choice.
+pub const MIN_TARGET_SPP: u32 = 8;
 
 impl RenderSummary {
     /// Wall time of the passes alone.
@@ -77,6 +127,21 @@ impl std::fmt::Display for RenderSummary {
                 ", {} non-finite samples dropped",
                 self.stats.nonfinite_samples
             )?;
+        }
+        if let Some(e) = &self.error {
+            write!(
+                f,
+                "; estimated error: RMSE {:.3e}, relMSE {:.3e} ({})",
+                e.rmse,
+                e.rel_mse,
+                e.method.name()
+            )?;
+        }
+        match self.ended {
+            Ended::AllSamples => {}
+            Ended::Time => write!(f, "; ended by the time budget")?,
+            Ended::Target => write!(f, "; ended by the error target")?,
+            Ended::Interrupt => write!(f, "; ended by an interrupt")?,
         }
         if !self.notes.is_empty() {
             write!(f, "; {}", self.notes.join("; "))?;
@@ -157,8 +222,7 @@ impl Renderer {
 
     /// Samples per pixel a full render takes.
     pub fn samples_per_pixel(&self) -> u32 {
-        let s = self.settings();
-        samples_taken(s.pixel_samples, s.pixel_sampling)
+        samples_per_pixel(self.settings())
     }
 
     /// Runs the [`crate::schedule::Prepare`] schedule once (analysis, tables, BVHs).
@@ -254,7 +318,69 @@ impl Renderer {
         let done = run_passes(&mut self.world, 0..n, pixels, &mut control)?;
         let mut summary = self.summary(done, start.elapsed());
         summary.interrupted = done < n && self.interrupted();
+        summary.ended = if summary.interrupted {
+            Ended::Interrupt
+        } else if done < n {
+            Ended::Time
+        } else {
+            Ended::AllSamples
+        };
         Ok(summary)
+    }
+
+    /// Renders until `rule` says stop. Without a target this is [`Renderer::render`];
+    /// with one, passes go on past `pixel_samples` and the estimate is checked after
+    /// every pass that completes a unit of the pattern (a stratified grid, a pair of
+    /// Sobol' replicas) from [`MIN_TARGET_SPP`] on.
+    pub fn render_until(
+        &mut self,
+        rule: &StopRule,
+        progress: &mut dyn FnMut(u64),
+    ) -> Result<RenderSummary> {
+        if rule.target_rmse.is_none() && rule.target_rel_error.is_none() {
+            return self.render(rule.time, progress);
+        }
+        self.prepare()?;
+        let start = self.started.unwrap_or_else(Instant::now);
+        let settings = self.settings().clone();
+        let method = EstimateMethod::for_settings(&settings);
+        let step = check_every(&settings);
+        let pixels = self.all_pixels();
+        let mut control = Control {
+            interrupt: self.interrupt.clone(),
+            budget: None,
+            start,
+            progress,
+        };
+        let mut done = 0u32;
+        let ended = loop {
+            if !run_pass(&mut self.world, done, pixels.clone(), &mut control)? {
+                break Ended::Interrupt;
+            }
+            done += 1;
+            if done.is_multiple_of(step)
+                && done >= MIN_TARGET_SPP
+                && rule.reached(self.film().error_estimate(method).as_ref())
+            {
+                break Ended::Target;
+            }
+            if rule.time.is_some_and(|t| start.elapsed() >= t) {
+                break Ended::Time;
+            }
+            if done == u32::MAX {
+                break Ended::AllSamples;
+            }
+        };
+        let mut summary = self.summary(done, start.elapsed());
+        summary.interrupted = ended == Ended::Interrupt;
+        summary.ended = ended;
+        Ok(summary)
+    }
+
+    /// The film's estimate of its error, by the method its settings call for.
+    pub fn error_estimate(&self) -> Option<ErrorEstimate> {
+        self.film()
+            .error_estimate(EstimateMethod::for_settings(self.settings()))
     }
 
     /// A summary of the run so far.
@@ -273,6 +399,8 @@ impl Renderer {
                 .map(|s| s.notes.clone())
                 .unwrap_or_default(),
             interrupted: false,
+            error: self.error_estimate(),
+            ended: Ended::AllSamples,
         }
     }
 
@@ -289,6 +417,16 @@ impl Renderer {
     /// The plan (valid after [`Renderer::prepare`]).
     pub fn plan(&self) -> &RenderPlan {
         self.world.resource::<RenderPlan>()
+    }
+}
+
+/// Passes between checks of an error target: a whole stratified grid, or both Sobol'
+/// replicas, so the estimate is judged on complete patterns.
+fn check_every(settings: &Settings) -> u32 {
+    match (settings.sampler, pixel_mode(settings)) {
+        (SamplerKind::Sobol, _) => 2,
+        (_, PixelSampling::Stratified) => samples_per_pixel(settings).max(1),
+        _ => 1,
     }
 }
 
@@ -335,6 +473,8 @@ mod tests {
             stats,
             notes: Vec::new(),
             interrupted: false,
+            error: None,
+            ended: Ended::AllSamples,
         };
         assert_eq!(summary.trace_seconds(), 3.0);
         assert_eq!(summary.mrays_per_second(), 1.0);

@@ -19,10 +19,11 @@ use std::sync::atomic::{AtomicBool, Ordering};
 use std::time::{Duration, Instant};
 
 use crate::error::{GlintError, Result};
+use crate::film::estimate::ErrorEstimate;
 use crate::film::metrics::{ImageError, image_error, log_log_slope};
 use crate::film::write_atomically;
 use crate::render::{Overrides, Renderer};
-use crate::sampling::samples_taken;
+use crate::sampling::{pixel_mode, samples_taken};
 use crate::scene::format::SceneFile;
 use crate::scene::{PixelSampling, parse_scene};
 use reference::{Reference, ReferenceOrigin, cached_reference, read_reference};
@@ -63,7 +64,7 @@ pub struct ConvergeOptions {
 }
 
 /// The columns of the CSV, in order.
-pub const CSV_COLUMNS: [&str; 8] = [
+pub const CSV_COLUMNS: [&str; 11] = [
     "configuration",
     "pass",
     "spp",
@@ -72,6 +73,9 @@ pub const CSV_COLUMNS: [&str; 8] = [
     "rmse",
     "rel_mse",
     "mae",
+    "true_rmse",
+    "est_rmse",
+    "est_rel_mse",
 ];
 
 /// One measured pass of one configuration.
@@ -87,6 +91,8 @@ pub struct PassRecord {
     pub rays: u64,
     /// Error against the reference.
     pub error: ImageError,
+    /// The render's own estimate of its error, without the reference.
+    pub estimate: Option<ErrorEstimate>,
 }
 
 /// The passes of one configuration.
@@ -98,6 +104,8 @@ pub struct Curve {
     pub spp_per_pass: u32,
     /// Measured passes, in order.
     pub passes: Vec<PassRecord>,
+    /// The reference's own estimated MSE (0 when unknown), part of every measured MSE.
+    pub reference_mse: f64,
 }
 
 impl Curve {
@@ -122,6 +130,22 @@ impl Curve {
     /// Fitted slope of log RMSE against log spp.
     pub fn slope_spp(&self) -> Option<f64> {
         log_log_slope(self.passes.iter().map(|p| (f64::from(p.spp), p.error.rmse)))
+    }
+
+    /// The true RMSE of a pass: the measured one less the reference's own error
+    /// (measured MSE = true MSE + reference MSE, the two being independent).
+    pub fn true_rmse(&self, pass: &PassRecord) -> f64 {
+        (pass.error.rmse.powi(2) - self.reference_mse)
+            .max(0.0)
+            .sqrt()
+    }
+
+    /// The ratio of the estimated to the true RMSE at the last measured pass.
+    pub fn estimate_ratio(&self) -> Option<f64> {
+        let last = self.passes.last()?;
+        let e = last.estimate?;
+        let truth = self.true_rmse(last);
+        (truth > 0.0).then(|| e.rmse / truth)
     }
 }
 
@@ -173,10 +197,21 @@ pub fn csv_text(curves: &[Curve]) -> String {
     for c in curves {
         let label = csv_field(&c.label());
         for p in &c.passes {
+            let estimate = p.estimate.map_or_else(
+                || ",".to_owned(),
+                |e| format!("{:.9e},{:.9e}", e.rmse, e.rel_mse),
+            );
             let _ = writeln!(
                 out,
-                "{label},{},{},{:.6},{},{:.9e},{:.9e},{:.9e}",
-                p.pass, p.spp, p.seconds, p.rays, p.error.rmse, p.error.rel_mse, p.error.mae
+                "{label},{},{},{:.6},{},{:.9e},{:.9e},{:.9e},{:.9e},{estimate}",
+                p.pass,
+                p.spp,
+                p.seconds,
+                p.rays,
+                p.error.rmse,
+                p.error.rel_mse,
+                p.error.mae,
+                c.true_rmse(p)
             );
         }
     }
@@ -220,11 +255,12 @@ fn run_configuration(
     let s = renderer.settings().clone();
     let mut curve = Curve {
         settings: settings.to_vec(),
-        spp_per_pass: match s.pixel_sampling {
+        spp_per_pass: match pixel_mode(&s) {
             PixelSampling::Uniform => 1,
             PixelSampling::Stratified => samples_taken(s.pixel_samples, s.pixel_sampling),
         },
         passes: Vec::new(),
+        reference_mse: reference.mse.unwrap_or(0.0),
     };
     let mut warnings = Vec::new();
     if s.pixel_samples <= 1 {
@@ -260,6 +296,7 @@ fn run_configuration(
             seconds,
             rays: renderer.stats().rays.total(),
             error,
+            estimate: renderer.error_estimate(),
         });
         let out_of_time = options.time.is_some_and(|t| seconds >= t.as_secs_f64());
         let out_of_spp = options

@@ -169,6 +169,8 @@ struct Panel<'a> {
     title: &'a str,
     x_label: &'a str,
     x_of: fn(&super::PassRecord) -> f64,
+    /// Also draw each curve's own error estimate, as a thin dashed line.
+    estimates: bool,
 }
 
 fn draw_panel(img: &mut RgbImage, left: i32, panel: &Panel, curves: &[Curve], y_axis: LogAxis) {
@@ -263,6 +265,18 @@ fn draw_panel(img: &mut RgbImage, left: i32, panel: &Panel, curves: &[Curve], y_
         for w in points.windows(2) {
             line(img, w[0], w[1], 3, color);
         }
+        if panel.estimates {
+            let estimated: Vec<(f64, f64)> = c
+                .passes
+                .iter()
+                .filter_map(|p| Some(((panel.x_of)(p), p.estimate?.rmse)))
+                .filter(|&(x, e)| x > 0.0 && e > 0.0)
+                .map(|(x, e)| (px(x), py(e)))
+                .collect();
+            for w in estimated.windows(2) {
+                dashed(img, w[0], w[1], color);
+            }
+        }
         if points.len() <= 40 {
             for &(x, y) in &points {
                 fill_rect(
@@ -278,6 +292,18 @@ fn draw_panel(img: &mut RgbImage, left: i32, panel: &Panel, curves: &[Curve], y_
     }
 }
 
+/// A 1-pixel line drawn in 6-pixel dashes.
+fn dashed(img: &mut RgbImage, a: (f64, f64), b: (f64, f64), c: Rgb<u8>) {
+    let len = ((b.0 - a.0).powi(2) + (b.1 - a.1).powi(2)).sqrt();
+    let steps = (len / 6.0).ceil().max(1.0) as usize;
+    for k in (0..steps).step_by(2) {
+        let t0 = k as f64 / steps as f64;
+        let t1 = ((k + 1) as f64 / steps as f64).min(1.0);
+        let at = |t: f64| (a.0 + (b.0 - a.0) * t, a.1 + (b.1 - a.1) * t);
+        line(img, at(t0), at(t1), 1, c);
+    }
+}
+
 /// The plot as an image: two panels side by side and the legend below them.
 pub fn plot_image(curves: &[Curve]) -> RgbImage {
     let rows = curves.len().max(1) as u32;
@@ -286,18 +312,22 @@ pub fn plot_image(curves: &[Curve]) -> RgbImage {
     let y_axis = LogAxis::around(
         curves
             .iter()
-            .flat_map(|c| c.passes.iter().map(|p| p.error.rmse)),
+            .flat_map(|c| c.passes.iter())
+            .flat_map(|p| [Some(p.error.rmse), p.estimate.map(|e| e.rmse)])
+            .flatten(),
     );
     let panels = [
         Panel {
             title: "RMSE vs render time",
             x_label: "seconds",
             x_of: |p| p.seconds,
+            estimates: false,
         },
         Panel {
-            title: "RMSE vs samples per pixel",
+            title: "RMSE vs spp (dashed: estimated)",
             x_label: "samples per pixel",
             x_of: |p| f64::from(p.spp),
+            estimates: true,
         },
     ];
     for (i, panel) in panels.iter().enumerate() {
@@ -323,8 +353,11 @@ pub fn plot_image(curves: &[Curve]) -> RgbImage {
             color,
         );
         let slope = |s: Option<f64>| s.map_or_else(|| "n/a".into(), |s| format!("{s:+.2}"));
+        let ratio = c
+            .estimate_ratio()
+            .map_or_else(|| "n/a".into(), |r| format!("{r:.2}"));
         let label = format!(
-            "{:<label_len$}   slope {} vs time, {} vs spp",
+            "{:<label_len$}   slope {} vs time, {} vs spp, estimate/true {ratio}",
             c.label(),
             slope(c.slope_time()),
             slope(c.slope_spp())

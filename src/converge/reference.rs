@@ -18,6 +18,11 @@ pub const CACHE_DIR: &str = ".glint-cache";
 /// of the compared configurations' (same seed would correlate their errors).
 const REFERENCE_SEED_SALT: u64 = 0x5EED_0F4E_F32E_4C00;
 
+/// How references are sampled (part of the cache key): Owen-scrambled Sobol' points
+/// converge faster than stratified pixels at equal spp, and their two replicas give an
+/// honest estimate of the reference's own error.
+const REFERENCE_SAMPLER: &str = "sobol";
+
 /// A reference image, linear RGB, row-major.
 #[derive(Clone, Debug)]
 pub struct Reference {
@@ -27,6 +32,9 @@ pub struct Reference {
     pub height: u32,
     /// Pixels.
     pub pixels: Vec<Vec3>,
+    /// The reference's own estimated MSE, when glint rendered it: measured MSE is the
+    /// true MSE plus this, so comparisons with an error estimate subtract it.
+    pub mse: Option<f64>,
 }
 
 /// How a reference was obtained.
@@ -56,7 +64,15 @@ pub fn read_reference(path: &Path) -> Result<Reference> {
         width,
         height,
         pixels,
+        mse: None,
     })
+}
+
+/// The file beside a cached reference that holds its estimated MSE, as text.
+fn mse_path(reference: &Path) -> PathBuf {
+    let mut name = reference.as_os_str().to_owned();
+    name.push(".mse");
+    PathBuf::from(name)
 }
 
 /// FNV-1a, 64 bit: a stable hash (unlike `std`'s, which may change between
@@ -85,6 +101,7 @@ pub fn cache_path(scene: &Path, scene_bytes: &[u8], overrides: &Overrides, spp: 
         settings.as_bytes(),
         &spp.to_le_bytes(),
         env!("CARGO_PKG_VERSION").as_bytes(),
+        REFERENCE_SAMPLER.as_bytes(),
     ]);
     let stem = scene.file_stem().unwrap_or_default().to_string_lossy();
     let dir = scene.parent().unwrap_or(Path::new(""));
@@ -92,8 +109,8 @@ pub fn cache_path(scene: &Path, scene_bytes: &[u8], overrides: &Overrides, spp: 
 }
 
 /// The reference for `scene` at `spp`: the cached file when it exists and has the
-/// expected size, otherwise a render (stratified pixel samples, the scene's other
-/// settings, an independent seed) written to the cache.
+/// expected size, otherwise a render (Sobol' samples, the scene's other settings, an
+/// independent seed) written to the cache with its estimated MSE beside it.
 ///
 /// Only the scene file's own bytes are hashed: editing a mesh or texture it
 /// references does not invalidate the cache (delete `.glint-cache/` then).
@@ -115,7 +132,10 @@ pub fn cached_reference(
     let (width, height) = (file.camera.width, file.camera.height);
     if path.exists() {
         match read_reference(&path) {
-            Ok(r) if r.width == width && r.height == height => {
+            Ok(mut r) if r.width == width && r.height == height => {
+                r.mse = std::fs::read_to_string(mse_path(&path))
+                    .ok()
+                    .and_then(|t| t.trim().parse().ok());
                 return Ok((r, ReferenceOrigin::Cached(path)));
             }
             _ => log(&format!(
@@ -125,7 +145,7 @@ pub fn cached_reference(
         }
     }
     file.settings.pixel_samples = spp.max(1);
-    file.settings.pixel_sampling = crate::scene::PixelSampling::Stratified;
+    file.settings.sampler = crate::scene::SamplerKind::Sobol;
     file.settings.seed ^= REFERENCE_SEED_SALT;
     let mut renderer = Renderer::from_scene(&file, scene)?;
     if let Some(flag) = interrupt {
@@ -158,6 +178,7 @@ pub fn cached_reference(
         ));
     }
     log(&format!("reference done in {:.1} s", summary.seconds));
+    let mse = renderer.error_estimate().map(|e| e.rmse * e.rmse);
     let film = renderer.film();
     let pixels = film.image();
     if let Some(dir) = path.parent() {
@@ -167,11 +188,15 @@ pub fn cached_reference(
         })?;
     }
     write_image(&path, width, height, &pixels, Encoding::Linear)?;
+    if let Some(mse) = mse {
+        crate::film::write_atomically(&mse_path(&path), format!("{mse:e}\n").as_bytes())?;
+    }
     Ok((
         Reference {
             width,
             height,
             pixels,
+            mse,
         },
         ReferenceOrigin::Rendered(path),
     ))

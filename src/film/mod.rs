@@ -1,5 +1,6 @@
 //! The film: accumulated radiance per pixel, image output, and error metrics.
 
+pub mod estimate;
 pub mod metrics;
 pub mod text;
 
@@ -14,7 +15,8 @@ use crate::error::{GlintError, Result};
 use crate::stats::{RenderStats, Stage};
 use crate::trace::wavefront::SampleRadiance;
 
-/// Accumulated radiance: a sum and a sample count per pixel, row 0 at the top.
+/// Accumulated radiance: a sum and a sample count per pixel, row 0 at the top, and the
+/// moments its error estimate needs (see [`estimate`]).
 #[derive(Resource, Clone, Debug, Default, PartialEq)]
 pub struct Film {
     /// Width in pixels.
@@ -25,6 +27,12 @@ pub struct Film {
     pub sum: Vec<DVec3>,
     /// Number of finite samples of each pixel.
     pub count: Vec<u32>,
+    /// Sum of squared deviations from the mean of each pixel's samples (Welford).
+    pub m2: Vec<DVec3>,
+    /// Sum of the finite samples of odd sample index (the second replica).
+    pub replica_sum: Vec<DVec3>,
+    /// Number of finite samples of odd sample index.
+    pub replica_count: Vec<u32>,
 }
 
 impl Film {
@@ -36,34 +44,42 @@ impl Film {
             height,
             sum: vec![DVec3::ZERO; n],
             count: vec![0; n],
+            m2: vec![DVec3::ZERO; n],
+            replica_sum: vec![DVec3::ZERO; n],
+            replica_count: vec![0; n],
         }
     }
 
-    /// Bytes a `width` x `height` render holds per pixel: the film itself and the image
-    /// written from it.
-    pub const BYTES_PER_PIXEL: u64 = (size_of::<DVec3>() + size_of::<u32>() + 16) as u64;
+    /// Bytes a render holds per pixel: the film's five buffers and the image written
+    /// from it.
+    pub const BYTES_PER_PIXEL: u64 = (3 * size_of::<DVec3>() + 2 * size_of::<u32>() + 16) as u64;
 
     /// An empty film, allocated fallibly: [`GlintError::Memory`] rather than an abort
     /// when the allocator refuses (the estimate is checked before, in `Renderer::prepare`).
     pub fn try_new(width: u32, height: u32) -> Result<Self> {
+        fn zeroed<T: Clone + Default>(n: usize) -> Option<Vec<T>> {
+            let mut v = Vec::new();
+            v.try_reserve_exact(n).ok()?;
+            v.resize(n, T::default());
+            Some(v)
+        }
         let n = width as usize * height as usize;
-        let refused = |_| {
+        let film = (|| {
+            Some(Self {
+                width,
+                height,
+                sum: zeroed(n)?,
+                count: zeroed(n)?,
+                m2: zeroed(n)?,
+                replica_sum: zeroed(n)?,
+                replica_count: zeroed(n)?,
+            })
+        })();
+        film.ok_or_else(|| {
             GlintError::from(crate::memory::MemoryError::Refused {
                 what: format!("a {width}x{height} film"),
                 needed: n as u64 * Self::BYTES_PER_PIXEL,
             })
-        };
-        let mut sum = Vec::new();
-        sum.try_reserve_exact(n).map_err(refused)?;
-        sum.resize(n, DVec3::ZERO);
-        let mut count = Vec::new();
-        count.try_reserve_exact(n).map_err(refused)?;
-        count.resize(n, 0);
-        Ok(Self {
-            width,
-            height,
-            sum,
-            count,
         })
     }
 

@@ -1,4 +1,5 @@
-//! Deterministic sampling: pixel patterns and light samples.
+//! Deterministic sampling: pixel patterns and light samples, independent, stratified
+//! or Owen-scrambled Sobol' (docs/sampling.md).
 //!
 //! Every random number is a pure function of (seed, pixel, sample index,
 //! dimension) (SPEC "Multisampling"), so an image does not depend on the
@@ -7,7 +8,8 @@
 pub mod light;
 pub mod pixel;
 pub mod sampler;
+pub mod sobol;
 
 pub use light::{sample_parallelogram_light, sample_segment_light};
-pub use pixel::{pixel_sample_offset, samples_taken};
-pub use sampler::{DIM_PIXEL, Sampler, light_dim};
+pub use pixel::{pixel_mode, pixel_sample_offset, samples_per_pixel, samples_taken};
+pub use sampler::{DIM_PIXEL, LightSlot, Sampler, light_dim};

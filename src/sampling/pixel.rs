@@ -2,8 +2,8 @@
 
 use glam::Vec2;
 
-use super::sampler::{DIM_PIXEL, Sampler};
-use crate::scene::PixelSampling;
+use super::sampler::Sampler;
+use crate::scene::{PixelSampling, SamplerKind, Settings};
 
 /// The largest `f32` below 1: offsets stay strictly inside their pixel.
 const BELOW_ONE: f32 = 1.0 - f32::EPSILON / 2.0;
@@ -26,10 +26,24 @@ pub fn samples_taken(n: u32, mode: PixelSampling) -> u32 {
     }
 }
 
+/// The pixel pattern the settings call for: Sobol' points cover the pixel themselves,
+/// so under `sampler: sobol` the pattern is the sampler's, whatever `pixel_sampling` says.
+pub fn pixel_mode(settings: &Settings) -> PixelSampling {
+    match settings.sampler {
+        SamplerKind::Sobol => PixelSampling::Uniform,
+        SamplerKind::Independent | SamplerKind::Stratified => settings.pixel_sampling,
+    }
+}
+
+/// Samples per pixel a full render with these settings takes.
+pub fn samples_per_pixel(settings: &Settings) -> u32 {
+    samples_taken(settings.pixel_samples, pixel_mode(settings))
+}
+
 /// Offset in [0,1)^2 within the pixel of sample `sample` of `n` (n = samples_taken).
 ///
 /// A single sample (`n <= 1`) is the pixel centre (0.5, 0.5) in both modes
-/// (SPEC "Camera"). Uniform: an independent random point. Stratified: a
+/// (SPEC "Camera"). Uniform: the sampler's point (independent, or Sobol'). Stratified: a
 /// random point inside cell `(sample % k, sample / k)` of the `k x k` grid
 /// with `k = round(sqrt(n))`; sample indices past `k*k` wrap around the grid.
 pub fn pixel_sample_offset(
@@ -42,7 +56,7 @@ pub fn pixel_sample_offset(
     if n <= 1 {
         return Vec2::splat(0.5);
     }
-    let jitter = sampler.get2(pixel, sample, DIM_PIXEL);
+    let jitter = sampler.pixel2(pixel, sample);
     match mode {
         PixelSampling::Uniform => jitter.min(Vec2::splat(BELOW_ONE)),
         PixelSampling::Stratified => {
@@ -70,6 +84,7 @@ fn in_cell(cell: u32, jitter: f32, k: u32) -> f32 {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::sampling::DIM_PIXEL;
 
     #[test]
     fn samples_taken_counts() {

@@ -2,6 +2,9 @@
 
 use glam::Vec2;
 
+use super::sobol::{sobol_1d, sobol_2d};
+use crate::scene::SamplerKind;
+
 /// The dimension of the pixel offset; the offset uses dimensions 0 and 1.
 pub const DIM_PIXEL: u32 = 0;
 
@@ -22,7 +25,12 @@ const LIGHT_SAMPLE_BITS: u32 = 9;
 pub struct Sampler {
     /// The seed (from the settings).
     pub seed: u64,
+    /// Which points the pixel and light samples use.
+    pub kind: SamplerKind,
 }
+
+/// Which light sample slot of a shading point: (depth, path, light) as in [`light_dim`].
+pub type LightSlot = (u32, u32, u32);
 
 /// The splitmix64 finaliser: a bijective 64-bit mixer with full avalanche.
 fn mix64(mut x: u64) -> u64 {
@@ -33,9 +41,88 @@ fn mix64(mut x: u64) -> u64 {
 }
 
 impl Sampler {
-    /// A sampler for the given seed.
+    /// An independent sampler for the given seed.
     pub fn new(seed: u64) -> Self {
-        Self { seed }
+        Self::with_kind(seed, SamplerKind::Independent)
+    }
+
+    /// A sampler of the given kind.
+    pub fn with_kind(seed: u64, kind: SamplerKind) -> Self {
+        Self { seed, kind }
+    }
+
+    /// Which of the two Sobol' replicas sample `sample` belongs to (0 or 1), and its
+    /// index within it: even and odd samples are independently scrambled sequences, so
+    /// their difference estimates the error (see `Film::error_estimate`).
+    pub fn sobol_replica(sample: u32) -> (u32, u32) {
+        (sample & 1, sample >> 1)
+    }
+
+    /// The 32-bit scramble seed of one dimension pair, for the low-discrepancy kinds.
+    fn pattern_seed(&self, pixel: u32, dim: u32, extra: u32) -> u32 {
+        let h = self.hash(pixel, extra, dim);
+        (h >> 32) as u32 ^ h as u32
+    }
+
+    /// The pixel offset pair of `sample` in [0,1)^2 (dimensions `DIM_PIXEL`, +1).
+    pub fn pixel2(&self, pixel: u32, sample: u32) -> Vec2 {
+        match self.kind {
+            SamplerKind::Sobol => {
+                let (replica, index) = Self::sobol_replica(sample);
+                Vec2::from(sobol_2d(
+                    index,
+                    self.pattern_seed(pixel, DIM_PIXEL, replica),
+                ))
+            }
+            SamplerKind::Independent | SamplerKind::Stratified => {
+                self.get2(pixel, sample, DIM_PIXEL)
+            }
+        }
+    }
+
+    /// Sample `k` of `n` on a light, 1D. Independent: dimension `light_dim(.., k)`.
+    /// Stratified: point k of a scrambled Sobol' set per (pixel, sample, slot), so the n
+    /// samples of one shading point are stratified. Sobol': point `index * n + k` of the
+    /// slot's sequence, so they are stratified across passes too.
+    pub fn light1(&self, pixel: u32, sample: u32, slot: LightSlot, k: u32, n: u32) -> f32 {
+        let (depth, path, light) = slot;
+        let dim = light_dim(depth, path, light, k);
+        match self.kind {
+            SamplerKind::Independent => self.get1(pixel, sample, dim),
+            _ => {
+                let (index, seed) = self.light_point(pixel, sample, slot, k, n);
+                sobol_1d(index, seed)
+            }
+        }
+    }
+
+    /// Sample `k` of `n` on a light, 2D; see [`Sampler::light1`].
+    pub fn light2(&self, pixel: u32, sample: u32, slot: LightSlot, k: u32, n: u32) -> Vec2 {
+        let (depth, path, light) = slot;
+        let dim = light_dim(depth, path, light, k);
+        match self.kind {
+            SamplerKind::Independent => self.get2(pixel, sample, dim),
+            _ => {
+                let (index, seed) = self.light_point(pixel, sample, slot, k, n);
+                Vec2::from(sobol_2d(index, seed))
+            }
+        }
+    }
+
+    /// Point index and scramble seed of light sample `k` of `n` (low-discrepancy kinds).
+    fn light_point(&self, pixel: u32, sample: u32, slot: LightSlot, k: u32, n: u32) -> (u32, u32) {
+        let (depth, path, light) = slot;
+        let dim = light_dim(depth, path, light, 0);
+        match self.kind {
+            SamplerKind::Sobol => {
+                let (replica, index) = Self::sobol_replica(sample);
+                (
+                    index.wrapping_mul(n).wrapping_add(k),
+                    self.pattern_seed(pixel, dim, replica),
+                )
+            }
+            _ => (k, self.pattern_seed(pixel, dim, sample)),
+        }
     }
 
     /// The 64-bit hash of (seed, pixel, sample, dim).
@@ -174,6 +261,57 @@ mod tests {
                 }
             }
         }
+    }
+
+    #[test]
+    fn a_shading_points_light_samples_are_stratified() {
+        use crate::sampling::sobol::is_net;
+        let slot = (1, 0, 3);
+        for seed in [0, 5] {
+            for pixel in [0, 17, 4000] {
+                for kind in [SamplerKind::Stratified, SamplerKind::Sobol] {
+                    let s = Sampler::with_kind(seed, kind);
+                    for sample in 0..4 {
+                        let points: Vec<[f32; 2]> = (0..16)
+                            .map(|k| s.light2(pixel, sample, slot, k, 16).to_array())
+                            .collect();
+                        assert!(is_net(&points, 4), "{kind:?} pixel {pixel} sample {sample}");
+                        let line: Vec<f32> = (0..16)
+                            .map(|k| s.light1(pixel, sample, slot, k, 16))
+                            .collect();
+                        let mut cells = [0; 16];
+                        line.iter().for_each(|&u| cells[(u * 16.0) as usize] += 1);
+                        assert!(cells.iter().all(|&c| c == 1), "{kind:?} 1D");
+                    }
+                }
+                // Sobol': the even passes (one replica) together are stratified too, and
+                // so are their pixel offsets.
+                let s = Sampler::with_kind(seed, SamplerKind::Sobol);
+                let over_passes: Vec<[f32; 2]> = (0..8)
+                    .flat_map(|pass| (0..16).map(move |k| (2 * pass, k)))
+                    .map(|(sample, k)| s.light2(pixel, sample, slot, k, 16).to_array())
+                    .collect();
+                assert!(is_net(&over_passes, 7));
+                let offsets: Vec<[f32; 2]> = (0..32)
+                    .map(|j| s.pixel2(pixel, 2 * j + 1).to_array())
+                    .collect();
+                assert!(is_net(&offsets, 5));
+            }
+        }
+    }
+
+    #[test]
+    fn independent_light_samples_are_the_old_dimensions() {
+        let s = Sampler::new(4);
+        assert_eq!(
+            s.light1(3, 2, (1, 0, 5), 7, 9),
+            s.get1(3, 2, light_dim(1, 0, 5, 7))
+        );
+        assert_eq!(
+            s.light2(3, 2, (1, 0, 5), 7, 9),
+            s.get2(3, 2, light_dim(1, 0, 5, 7))
+        );
+        assert_eq!(s.pixel2(3, 2), s.get2(3, 2, DIM_PIXEL));
     }
 
     #[test]

@@ -59,6 +59,21 @@ pub enum PixelSampling {
     Stratified,
 }
 
+/// Which points estimate the pixel and light integrals (docs/sampling.md).
+///
+/// All three are unbiased and pure functions of (seed, pixel, sample index, dimension).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum SamplerKind {
+    /// Independent random numbers (SPEC "Multisampling": uniform offsets are independent).
+    #[default]
+    Independent,
+    /// Independent across passes; the light samples of one shading point are stratified.
+    Stratified,
+    /// Owen-scrambled Sobol' points over passes for every dimension, in two replicas.
+    Sobol,
+}
+
 /// Every render setting, with SPEC's defaults.
 #[derive(Resource, Clone, Debug, PartialEq, Serialize, Deserialize)]
 #[serde(default, deny_unknown_fields)]
@@ -93,6 +108,8 @@ pub struct Settings {
     pub pixel_sampling: PixelSampling,
     /// Samples per segment or parallelogram light.
     pub shadow_samples: u32,
+    /// Which points estimate the pixel and light integrals.
+    pub sampler: SamplerKind,
     /// Maximum ray depth: camera rays have depth 0.
     pub max_depth: u32,
     /// Seed of every random number.
@@ -119,6 +136,7 @@ impl Default for Settings {
             pixel_samples: 1,
             pixel_sampling: PixelSampling::Uniform,
             shadow_samples: 4,
+            sampler: SamplerKind::Independent,
             max_depth: 6,
             seed: 0,
             background: Vec3::ZERO,
@@ -128,7 +146,7 @@ impl Default for Settings {
 
 impl Settings {
     /// The names accepted by [`Settings::set`], in declaration order.
-    pub const KEYS: [&'static str; 18] = [
+    pub const KEYS: [&'static str; 19] = [
         "shading",
         "shading_model",
         "gradient",
@@ -144,6 +162,7 @@ impl Settings {
         "pixel_samples",
         "pixel_sampling",
         "shadow_samples",
+        "sampler",
         "max_depth",
         "seed",
         "background",
@@ -183,6 +202,7 @@ impl Settings {
             pixel_samples,
             pixel_sampling,
             shadow_samples,
+            sampler,
             max_depth,
             seed,
             background

@@ -3,7 +3,7 @@
 use bevy_ecs::prelude::*;
 use glam::Vec3;
 
-use crate::sampling::{Sampler, light_dim, sample_parallelogram_light, sample_segment_light};
+use crate::sampling::{Sampler, sample_parallelogram_light, sample_segment_light};
 use crate::scene::{ParallelogramLight, PointLight, SegmentLight};
 use crate::stats::{RenderStats, Stage};
 
@@ -64,7 +64,7 @@ impl Lights {
         let inv = 1.0 / n as f32;
         for s in &self.segments {
             for k in 0..n {
-                let u = sampler.get1(pixel, sample, light_dim(depth, path, light, k));
+                let u = sampler.light1(pixel, sample, (depth, path, light), k, n);
                 let (position, color) = sample_segment_light(s, u);
                 f(LightSample {
                     position,
@@ -76,7 +76,7 @@ impl Lights {
         }
         for q in &self.parallelograms {
             for k in 0..n {
-                let uv = sampler.get2(pixel, sample, light_dim(depth, path, light, k));
+                let uv = sampler.light2(pixel, sample, (depth, path, light), k, n);
                 let (position, color) = sample_parallelogram_light(q, uv);
                 f(LightSample {
                     position,

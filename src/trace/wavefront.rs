@@ -17,7 +17,7 @@ use super::materials::Materials;
 use super::plan::RenderPlan;
 use super::surface::{SHADOW_EPSILON, Surface, surface_at};
 use crate::accel::Ray;
-use crate::sampling::{Sampler, pixel_sample_offset, samples_taken};
+use crate::sampling::{Sampler, pixel_mode, pixel_sample_offset, samples_taken};
 use crate::scene::{Camera, PixelSampling, Settings};
 use crate::shade::{Shading, ShadingInput};
 use crate::stats::{RenderStats, Stage};
@@ -162,9 +162,9 @@ pub struct CameraSampleOffsets {
 impl CameraSampleOffsets {
     /// The offsets the settings and the plan call for.
     pub fn new(settings: &Settings, plan: &RenderPlan) -> Self {
-        let mode = settings.pixel_sampling;
+        let mode = pixel_mode(settings);
         Self {
-            sampler: Sampler::new(settings.seed),
+            sampler: Sampler::with_kind(settings.seed, settings.sampler),
             samples: samples_taken(settings.pixel_samples, mode),
             mode,
             patterns: plan.pixel_patterns,
@@ -410,7 +410,7 @@ pub fn shade_hits(
             gradient: &s.gradient,
             comparison_gradient: &s.comparison_gradient,
         },
-        sampler: Sampler::new(s.seed),
+        sampler: Sampler::with_kind(s.seed, s.sampler),
         lights: &lights,
         materials: &materials,
         region: &region,

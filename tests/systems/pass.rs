@@ -2,6 +2,7 @@
 
 use bevy_ecs::prelude::*;
 use glam::{DVec3, Vec3};
+use glint::film::estimate::{EstimateMethod, accumulate_moments};
 use glint::film::{Film, accumulate_film};
 use glint::scene::{Camera, Material, MaterialRef, Settings, Sphere};
 use glint::schedule::{RenderStats, Stage, add_render_schedules, run_prepare, trace_wavefronts};
@@ -163,4 +164,40 @@ fn accumulate_film_counts_and_drops_non_finite_samples() {
     assert_eq!(film.count, [0, 1]);
     assert_eq!(film.sum[0], DVec3::ZERO);
     assert_eq!(world.resource::<RenderStats>().nonfinite_samples, 1);
+}
+
+#[test]
+fn accumulate_moments_adds_deviations_and_the_odd_replica() {
+    // Pixel 0 already holds one sample of 1.0 (pass 0); pass 1 adds 3.0.
+    let mut film = Film::new(2, 1);
+    film.sum[0] = DVec3::ONE;
+    film.count[0] = 1;
+    let radiance = SampleRadiance {
+        first_pixel: 0,
+        values: vec![Vec3::splat(3.0), Vec3::new(f32::NAN, 0.0, 0.0)],
+    };
+    let region = PassRegion {
+        sample: 1,
+        first_pixel: 0,
+        pixels: 2,
+    };
+    let mut world = world![film, radiance, region, RenderStats::default()];
+    run(&mut world, accumulate_moments);
+    run(&mut world, accumulate_film);
+    let film = world.resource::<Film>();
+    // Welford: (3 - 1) * (3 - 2) = 2, the sum of squared deviations of {1, 3}.
+    assert_eq!(film.m2[0], DVec3::splat(2.0));
+    assert_eq!(
+        (film.replica_sum[0], film.replica_count[0]),
+        (DVec3::splat(3.0), 1)
+    );
+    assert_eq!(
+        (film.m2[1], film.replica_count[1]),
+        (DVec3::ZERO, 0),
+        "non-finite"
+    );
+    // s^2 / n = 2 / 2 = 1; replicas (1 - 3)^2 (1 + 1) / (2 * 4) = 1.
+    for method in [EstimateMethod::Moments, EstimateMethod::Replicas] {
+        assert_eq!(film.pixel_variance(0, method), Some(DVec3::ONE));
+    }
 }

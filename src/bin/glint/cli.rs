@@ -130,6 +130,13 @@ pub struct RenderArgs {
     /// Stop after the pass that exceeds this time budget, e.g. `30s`, `2m`, `500ms`.
     #[arg(long, value_parser = parse_duration)]
     pub time: Option<Duration>,
+    /// Stop when the estimated RMSE of the image reaches this, e.g. `0.005` (passes go
+    /// on past the scene's pixel_samples; --time still bounds the run).
+    #[arg(long, value_parser = parse_target)]
+    pub target_error: Option<f64>,
+    /// Stop when the estimated relative error, sqrt(relMSE), reaches this, e.g. `0.02`.
+    #[arg(long, value_parser = parse_target)]
+    pub target_rel_error: Option<f64>,
     /// Encode PNG output with the sRGB curve instead of clamped linear values.
     #[arg(long)]
     pub srgb: bool,
@@ -145,10 +152,9 @@ pub struct ConvergeArgs {
     /// Reference image (EXR, same size as the render).
     #[arg(long, conflicts_with = "reference_spp")]
     pub reference: Option<PathBuf>,
-    /// Render the reference with this many samples per pixel (stratified, rounded to a
-    /// square) and cache it in `.glint-cache/` beside the scene. 4096 spp of the Cornell
-    /// box take minutes: the time left is printed as it goes; a smaller value is quicker
-    /// but its own noise then floors the measured error.
+    /// Render the reference with this many samples per pixel (Owen-scrambled Sobol')
+    /// and cache it, with its estimated error, in `.glint-cache/` beside the scene.
+    /// 4096 spp of the Cornell box take minutes: the time left is printed as it goes.
     #[arg(long, default_value_t = 4096)]
     pub reference_spp: u32,
     /// Time budget per configuration (render time only, error measurement excluded).
@@ -171,6 +177,13 @@ pub struct ConvergeArgs {
     /// Worker threads (default or 0: all cores; at most 4 per core).
     #[arg(long)]
     pub threads: Option<usize>,
+}
+
+fn parse_target(s: &str) -> Result<f64, String> {
+    match s.trim().parse::<f64>() {
+        Ok(v) if v.is_finite() && v > 0.0 => Ok(v),
+        _ => Err(format!("expected a positive number, got \"{s}\"")),
+    }
 }
 
 fn parse_compare(s: &str) -> Result<(String, Vec<String>), String> {

@@ -51,8 +51,16 @@ pub fn run(args: &ConvergeArgs) -> CliResult<Option<Interrupted>> {
 fn table(report: &ConvergeReport) -> String {
     let slope = |s: Option<f64>| s.map_or_else(|| "n/a".into(), |s| format!("{s:+.2}"));
     let mut out = format!(
-        "{:<44} {:>6} {:>6} {:>8} {:>10} {:>10} {:>10} {:>10}\n",
-        "configuration", "passes", "spp", "seconds", "RMSE", "relMSE", "slope/s", "slope/spp"
+        "{:<44} {:>6} {:>6} {:>8} {:>10} {:>10} {:>10} {:>10} {:>9}\n",
+        "configuration",
+        "passes",
+        "spp",
+        "seconds",
+        "RMSE",
+        "relMSE",
+        "slope/s",
+        "slope/spp",
+        "est/true"
     );
     for c in &report.curves {
         let Some(last) = c.passes.last() else {
@@ -60,7 +68,7 @@ fn table(report: &ConvergeReport) -> String {
             continue;
         };
         out += &format!(
-            "{:<44} {:>6} {:>6} {:>8.2} {:>10.3e} {:>10.3e} {:>10} {:>10}\n",
+            "{:<44} {:>6} {:>6} {:>8.2} {:>10.3e} {:>10.3e} {:>10} {:>10} {:>9}\n",
             c.label(),
             c.passes.len(),
             last.spp,
@@ -68,7 +76,9 @@ fn table(report: &ConvergeReport) -> String {
             last.error.rmse,
             last.error.rel_mse,
             slope(c.slope_time()),
-            slope(c.slope_spp())
+            slope(c.slope_spp()),
+            c.estimate_ratio()
+                .map_or_else(|| "n/a".into(), |r| format!("{r:.2}"))
         );
     }
     out

@@ -5,6 +5,7 @@ use std::path::{Path, PathBuf};
 
 use glint::Renderer;
 use glint::film::{Encoding, write_image};
+use glint::render::StopRule;
 use indicatif::{ProgressBar, ProgressStyle};
 
 use crate::cli::RenderArgs;
@@ -65,8 +66,22 @@ pub fn run(args: &RenderArgs) -> CliResult<Option<Interrupted>> {
     renderer.set_interrupt(ctrl_c_flag()?);
     let camera = renderer.camera().expect("a loaded scene has a camera");
     let total = camera.width as u64 * camera.height as u64 * renderer.samples_per_pixel() as u64;
+    let rule = StopRule {
+        time: args.time,
+        target_rmse: args.target_error,
+        target_rel_error: args.target_rel_error,
+    };
+    let targeted = rule.target_rmse.is_some() || rule.target_rel_error.is_some();
     let bar = if args.quiet || !std::io::stderr().is_terminal() {
         ProgressBar::hidden()
+    } else if targeted {
+        // The number of passes is not known in advance: count pixel samples instead.
+        let bar = ProgressBar::new_spinner();
+        bar.set_style(
+            ProgressStyle::with_template("{spinner} [{elapsed_precise}] {pos} pixel samples")
+                .expect("valid template"),
+        );
+        bar
     } else {
         let bar = ProgressBar::new(total);
         bar.set_style(
@@ -77,7 +92,7 @@ pub fn run(args: &RenderArgs) -> CliResult<Option<Interrupted>> {
         );
         bar
     };
-    let summary = renderer.render(args.time, &mut |n| bar.inc(n))?;
+    let summary = renderer.render_until(&rule, &mut |n| bar.inc(n))?;
     bar.finish_and_clear();
     let film = renderer.film();
     let (least, most) = (

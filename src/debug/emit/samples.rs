@@ -5,11 +5,12 @@ use bevy_ecs::prelude::*;
 use super::{SAMPLE_POINT, Spawner, prim};
 use crate::debug::log::DebugTrace;
 use crate::debug::primitives::{Feature, Shape, Values};
+use crate::sampling::pixel_mode;
 use crate::scene::{PixelSampling, Settings};
 
 /// Multisampling: the pixel's sample offsets on its grid, with strata when stratified.
 pub fn emit_samples(mut spawner: Spawner, log: Res<DebugTrace>, settings: Res<Settings>) {
-    let strata = match settings.pixel_sampling {
+    let strata = match pixel_mode(&settings) {
         PixelSampling::Uniform => None,
         PixelSampling::Stratified => {
             Some((log.camera_samples.len() as f64).sqrt().round().max(1.0) as u32)

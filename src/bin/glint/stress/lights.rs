@@ -154,6 +154,8 @@ pub fn lights(b: &Budget) -> Vec<Row> {
             stats: img.stats.clone(),
             notes: Vec::new(),
             interrupted: false,
+            error: None,
+            ended: Default::default(),
         }
         .to_string();
         rows.push(Row::exactly(
