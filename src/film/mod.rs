@@ -1,6 +1,7 @@
 //! The film: accumulated radiance per pixel, image output, and error metrics.
 
 pub mod metrics;
+pub mod part;
 pub mod text;
 
 use std::io::Write;
@@ -25,6 +26,10 @@ pub struct Film {
     pub sum: Vec<DVec3>,
     /// Number of finite samples of each pixel.
     pub count: Vec<u32>,
+    /// The rounding error of each `sum` (`sum + err` is the exact sum of the samples):
+    /// it makes the mean independent of the order samples were added in, so a render
+    /// split into parts merges bit-identically (see [`part`]).
+    pub err: Vec<DVec3>,
 }
 
 impl Film {
@@ -36,6 +41,7 @@ impl Film {
             height,
             sum: vec![DVec3::ZERO; n],
             count: vec![0; n],
+            err: vec![DVec3::ZERO; n],
         }
     }
 
@@ -47,7 +53,7 @@ impl Film {
     fn mean(&self, i: usize) -> Vec3 {
         match self.count[i] {
             0 => Vec3::ZERO,
-            n => (self.sum[i] / n as f64).as_vec3(),
+            n => ((self.sum[i] + self.err[i]) / n as f64).as_vec3(),
         }
     }
 
@@ -68,11 +74,12 @@ pub fn accumulate_film(
     let film = &mut *film;
     let dropped: u64 = film.sum[start..end]
         .par_iter_mut()
+        .zip(&mut film.err[start..end])
         .zip(&mut film.count[start..end])
         .zip(&radiance.values)
-        .map(|((sum, count), c)| {
+        .map(|(((sum, err), count), c)| {
             if c.is_finite() {
-                *sum += c.as_dvec3();
+                add_exact(sum, err, c.as_dvec3());
                 *count += 1;
                 0
             } else {
@@ -82,6 +89,17 @@ pub fn accumulate_film(
         .sum();
     stats.nonfinite_samples += dropped;
     stats.record(Stage::AccumulateFilm, radiance.values.len() as u64);
+}
+
+/// Adds `x` to the sum `(sum, err)` without losing a bit: `sum` is rounded as a plain
+/// `+=` would be (Knuth's two-sum), `err` collects what the rounding lost. While `err`'s
+/// own additions are exact, which holds unless one pixel's samples span more than about
+/// 80 binades, `sum + err` is the exact total whatever the order of the additions.
+pub fn add_exact(sum: &mut DVec3, err: &mut DVec3, x: DVec3) {
+    let s = *sum + x;
+    let b = s - *sum;
+    *err += (*sum - (s - b)) + (x - b);
+    *sum = s;
 }
 
 /// How 8-bit outputs encode linear values.

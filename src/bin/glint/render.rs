@@ -10,14 +10,14 @@ use indicatif::{ProgressBar, ProgressStyle};
 use crate::cli::RenderArgs;
 use crate::{CliError, CliResult, Interrupted, check_settings, ctrl_c_flag, set_threads};
 
-fn default_output(scene: &Path) -> PathBuf {
+pub fn default_output(scene: &Path) -> PathBuf {
     let stem = scene.file_stem().unwrap_or_default().to_string_lossy();
     PathBuf::from(format!("{stem}.png"))
 }
 
 /// Fails on an output glint could not write, before any time is spent on the render:
 /// an unknown format, a folder in its place, a missing or unwritable folder.
-fn check_output(output: &Path) -> CliResult<()> {
+pub fn check_output(output: &Path) -> CliResult<()> {
     let flag = |why: String| Err(CliError::Flag(format!("{}: {why}", output.display())));
     match output.extension().and_then(|e| e.to_str()) {
         Some(e) if e.eq_ignore_ascii_case("png") || e.eq_ignore_ascii_case("exr") => {}
@@ -49,8 +49,26 @@ fn partial_path(output: &Path) -> PathBuf {
     output.with_file_name(format!("{stem}.partial.{ext}"))
 }
 
+/// A progress bar over `total` pixel samples on a terminal, hidden otherwise.
+pub fn progress_bar(quiet: bool, total: u64) -> ProgressBar {
+    if quiet || !std::io::stderr().is_terminal() {
+        return ProgressBar::hidden();
+    }
+    let bar = ProgressBar::new(total);
+    bar.set_style(
+        ProgressStyle::with_template(
+            "{spinner} [{elapsed_precise}] {wide_bar} {percent}% (eta {eta})",
+        )
+        .expect("valid template"),
+    );
+    bar
+}
+
 /// Renders, writes the image and prints the summary (or why the image is partial).
 pub fn run(args: &RenderArgs) -> CliResult<Option<Interrupted>> {
+    if args.samples.is_some() || args.crop.is_some() {
+        return crate::merge::render_part(args);
+    }
     set_threads(args.threads)?;
     let output = args
         .output
@@ -65,18 +83,7 @@ pub fn run(args: &RenderArgs) -> CliResult<Option<Interrupted>> {
     renderer.set_interrupt(ctrl_c_flag()?);
     let camera = renderer.camera().expect("a loaded scene has a camera");
     let total = camera.width as u64 * camera.height as u64 * renderer.samples_per_pixel() as u64;
-    let bar = if args.quiet || !std::io::stderr().is_terminal() {
-        ProgressBar::hidden()
-    } else {
-        let bar = ProgressBar::new(total);
-        bar.set_style(
-            ProgressStyle::with_template(
-                "{spinner} [{elapsed_precise}] {wide_bar} {percent}% (eta {eta})",
-            )
-            .expect("valid template"),
-        );
-        bar
-    };
+    let bar = progress_bar(args.quiet, total);
     let summary = renderer.render(args.time, &mut |n| bar.inc(n))?;
     bar.finish_and_clear();
     let film = renderer.film();
