@@ -51,10 +51,13 @@ def render_part(glint: str, args: list[str], samples: tuple[int, int]) -> bytes:
         out = os.path.join(folder, "part.exr")
         cmd = [glint, "render", *args, "--samples", f"{samples[0]}..{samples[1]}", "-q", "-o", out]
         done = subprocess.run(cmd, capture_output=True, text=True, preexec_fn=_die_with_parent)
+        # Exit code 1 is glint refusing its input: the same input fails the same way.
+        if done.returncode == 1:
+            raise GlintFailed(done.stderr.strip() or "glint exited with code 1")
         if done.returncode < 0:
             raise PartKilled(f"glint was killed by signal {-done.returncode}")
         if done.returncode != 0:
-            raise GlintFailed(done.stderr.strip() or f"glint exited with code {done.returncode}")
+            raise PartKilled(f"glint exited with code {done.returncode}: {done.stderr.strip()}")
         with open(out, "rb") as f:
             return f.read()
     finally:
@@ -111,6 +114,7 @@ def render(a: argparse.Namespace) -> int:
     ranges = split(a.spp, a.parts)
     # Parts cancelled after a failure would each print a traceback at exit.
     os.environ.setdefault("RAY_IGNORE_UNHANDLED_ERRORS", "1")
+    started = time.monotonic()
     ray.init(address=a.address, logging_level="ERROR", log_to_driver=False, include_dashboard=False)
     start = time.monotonic()
     args = glint_args(a)
@@ -122,12 +126,17 @@ def render(a: argparse.Namespace) -> int:
         i = pending.pop(ready[0])
         try:
             results[i] = ray.get(ready[0])
-        except GlintFailed as e:
+        except (GlintFailed, ray.exceptions.RayError) as e:
             for ref in pending:
                 ray.cancel(ref, force=True)
-            # glint's own message, which names the file and field.
-            cause = getattr(e, "cause", e)
-            print(cause.args[0] if cause.args else str(cause), file=sys.stderr)
+            if isinstance(e, GlintFailed):
+                # glint's own message, which names the file and field.
+                cause = getattr(e, "cause", e)
+                print(cause.args[0] if cause.args else str(cause), file=sys.stderr)
+            else:
+                a0, b0 = ranges[i]
+                print(f"error: part {i} (samples {a0}..{b0}) failed after {WORKER_RETRIES} retries: {e}",
+                      file=sys.stderr)
             return 1
         if not a.quiet:
             print(
@@ -145,7 +154,15 @@ def render(a: argparse.Namespace) -> int:
         merge = [local_glint, "merge", *files, "-o", a.output]
         if a.quiet:
             merge.append("-q")
-        return subprocess.run(merge).returncode
+        code = subprocess.run(merge).returncode
+        if not a.quiet:
+            now = time.monotonic()
+            print(
+                f"glint-ray: Ray started in {start - started:.1f} s, {len(ranges)} parts rendered "
+                f"and merged in {now - start:.1f} s",
+                file=sys.stderr,
+            )
+        return code
     finally:
         shutil.rmtree(folder, ignore_errors=True)
 
