@@ -9,7 +9,9 @@ use std::process::Command;
 
 use glint::Renderer;
 use glint::film::Film;
-use glint::film::part::{Crop, Part, merge_parts, read_part, scene_hash, write_part};
+use glint::film::part::{
+    Crop, Part, merge_into_part, merge_parts, read_part, scene_hash, write_part,
+};
 use glint::scene::Overrides;
 
 use common::temp_dir;
@@ -63,8 +65,8 @@ fn bits(film: &Film) -> Vec<[u32; 3]> {
 }
 
 fn merged(parts: &[(PathBuf, Part)]) -> Film {
-    let (film, total) = merge_parts(parts).unwrap();
-    assert_eq!(total, SPP);
+    let (film, samples) = merge_parts(parts).unwrap();
+    assert_eq!(samples, 0..SPP);
     film
 }
 
@@ -117,6 +119,21 @@ fn crop_tilings_merge_bit_identically() {
         part(false, 6..SPP, crop(0, 0, 25, H)),
         part(false, 6..SPP, crop(25, 0, W, H)),
     ];
+    assert!(bits(&merged(&parts)) == expected);
+}
+
+#[test]
+fn merges_of_merges_are_bit_identical() {
+    let expected = bits(&single(false));
+    // A tree: (3..9 in two windows + 9..16) as one part, then with 0..3.
+    let inner = [
+        part(false, 3..9, crop(0, 0, W, 7)),
+        part(false, 3..9, crop(0, 7, W, H)),
+        part(false, 9..SPP, Crop::full(W, H)),
+    ];
+    let later = merge_into_part(&inner).unwrap();
+    assert_eq!(later.info.samples, 3..SPP);
+    let parts = [part(false, 0..3, Crop::full(W, H)), ("later".into(), later)];
     assert!(bits(&merged(&parts)) == expected);
 }
 
@@ -204,7 +221,7 @@ fn the_merge_refuses_parts_that_do_not_fit() {
     ]);
     assert!(e.starts_with("seed8.exr: the settings differ"), "{e}");
 
-    assert_eq!(merge_parts(&[a, b]).unwrap().1, SPP);
+    assert_eq!(merge_parts(&[a, b]).unwrap().1, 0..SPP);
 }
 
 #[test]
@@ -330,6 +347,19 @@ fn the_cli_merges_parts_into_the_bytes_of_a_single_render() {
             "{err}"
         );
     }
+    // A merge into a part merges again; an image needs samples from 0.
+    let (ok, err) = glint(
+        d,
+        &["merge", "p2.exr", "p3.exr", "--part", "-o", "late.exr"],
+    );
+    assert!(ok, "{err}");
+    let (ok, err) = glint(d, &["merge", "late.exr", "-o", "x.png"]);
+    assert!(!ok && err.contains("no part has samples 0..3"), "{err}");
+    let (ok, err) = glint(d, &["merge", "late.exr", "p1.exr", "-o", "tree.exr"]);
+    assert!(ok, "{err}");
+    assert!(
+        std::fs::read(d.join("tree.exr")).unwrap() == std::fs::read(d.join("single.exr")).unwrap()
+    );
     assert!(!d.join("x.png").exists());
     // A part is EXR, within the render's samples and inside the image.
     for (extra, why) in [

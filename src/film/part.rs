@@ -348,9 +348,10 @@ pub fn read_part(path: &Path) -> Result<Part> {
 }
 
 /// Merges parts into the film of the whole image, after checking that they are of one
-/// scene, settings and size and that, at every pixel, their sample ranges tile `0..N`
-/// for one `N`; returns the film and `N`. Each error names the offending file.
-pub fn merge_parts(parts: &[(PathBuf, Part)]) -> Result<(Film, u32)> {
+/// scene, settings and size and that, at every pixel, their sample ranges tile `A..N`
+/// for one `A` (the lowest start) and one `N`; returns the film and `A..N`. Each error
+/// names the offending file.
+pub fn merge_parts(parts: &[(PathBuf, Part)]) -> Result<(Film, Range<u32>)> {
     let Some((first_path, first)) = parts.first() else {
         return Err(GlintError::Part("no parts to merge".into()));
     };
@@ -377,9 +378,10 @@ pub fn merge_parts(parts: &[(PathBuf, Part)]) -> Result<(Film, u32)> {
     let mut film = Film::new(first.width, first.height);
     // Which part last added to each pixel, to name it when the next one overlaps.
     let mut owner: Vec<Option<usize>> = vec![None; w * h];
-    let mut next: Vec<u32> = vec![0; w * h];
     let mut order: Vec<usize> = (0..parts.len()).collect();
     order.sort_by_key(|&i| parts[i].1.info.samples.start);
+    let from = parts[order[0]].1.info.samples.start;
+    let mut next: Vec<u32> = vec![from; w * h];
     for i in order {
         let (path, part) = &parts[i];
         let (samples, crop) = (&part.info.samples, part.info.crop);
@@ -429,7 +431,22 @@ pub fn merge_parts(parts: &[(PathBuf, Part)]) -> Result<(Film, u32)> {
             None => GlintError::Part(message),
         });
     }
-    Ok((film, total))
+    Ok((film, from..total))
+}
+
+/// Merges parts (see [`merge_parts`]) into one part of the whole image, which merges
+/// with others as exactly as its parts would: merges can form a tree.
+pub fn merge_into_part(parts: &[(PathBuf, Part)]) -> Result<Part> {
+    let (film, samples) = merge_parts(parts)?;
+    let first = &parts[0].1.info;
+    Ok(Part {
+        info: PartInfo {
+            samples,
+            crop: Crop::full(film.width, film.height),
+            ..first.clone()
+        },
+        film,
+    })
 }
 
 #[cfg(test)]

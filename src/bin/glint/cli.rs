@@ -162,6 +162,10 @@ pub struct MergeArgs {
     /// No summary line.
     #[arg(short, long)]
     pub quiet: bool,
+    /// Write the merge as a part (EXR) instead of an image, to merge again with others:
+    /// merges can form a tree, exactly.
+    #[arg(long)]
+    pub part: bool,
 }
 
 #[derive(Args, Debug)]

@@ -5,7 +5,7 @@
 use std::path::PathBuf;
 
 use glint::Renderer;
-use glint::film::part::{Crop, merge_parts, read_part, scene_hash, write_part};
+use glint::film::part::{Crop, merge_into_part, merge_parts, read_part, scene_hash, write_part};
 use glint::film::{Encoding, write_image};
 
 use crate::cli::{MergeArgs, RenderArgs};
@@ -75,12 +75,40 @@ pub fn render_part(args: &RenderArgs) -> CliResult<Option<Interrupted>> {
 /// Reads, checks and merges the parts, and writes the image.
 pub fn run(args: &MergeArgs) -> CliResult<()> {
     check_output(&args.output)?;
+    let is_exr = args
+        .output
+        .extension()
+        .is_some_and(|e| e.eq_ignore_ascii_case("exr"));
+    if args.part && !is_exr {
+        return Err(CliError::Flag(format!(
+            "{}: --part writes a part, which is EXR: name it .exr",
+            args.output.display()
+        )));
+    }
     let parts = args
         .parts
         .iter()
         .map(|p| Ok((p.clone(), read_part(p)?)))
         .collect::<CliResult<Vec<(PathBuf, _)>>>()?;
-    let (film, total) = merge_parts(&parts)?;
+    if args.part {
+        write_part(&args.output, &merge_into_part(&parts)?)?;
+        if !args.quiet {
+            eprintln!(
+                "{}: a part merged from {} parts",
+                args.output.display(),
+                parts.len()
+            );
+        }
+        return Ok(());
+    }
+    let (film, samples) = merge_parts(&parts)?;
+    if samples.start > 0 {
+        return Err(CliError::Flag(format!(
+            "no part has samples 0..{} (an image needs them; --part writes a part of samples {}..{})",
+            samples.start, samples.start, samples.end
+        )));
+    }
+    let total = samples.end;
     let encoding = if args.srgb {
         Encoding::Srgb
     } else {
