@@ -43,13 +43,19 @@ def _die_with_parent() -> None:
         pass
 
 
-@ray.remote(num_cpus=1, max_retries=WORKER_RETRIES, retry_exceptions=[PartKilled])
-def render_part(glint: str, args: list[str], samples: tuple[int, int]) -> bytes:
-    """Renders samples ``samples[0]..samples[1]`` with ``glint``; returns the part file."""
-    folder = tempfile.mkdtemp(prefix="glint-ray-part-")
+def run_glint(glint: str, args: list[str], inputs: list[bytes] = ()) -> bytes:
+    """Runs ``glint ARGS -o OUT`` in a fresh folder holding ``inputs`` as ``in*.exr``
+    (appended to ARGS); returns OUT's bytes. Raises ``GlintFailed`` on exit code 1 and
+    ``PartKilled`` on any other failure."""
+    folder = tempfile.mkdtemp(prefix="glint-ray-")
     try:
-        out = os.path.join(folder, "part.exr")
-        cmd = [glint, "render", *args, "--samples", f"{samples[0]}..{samples[1]}", "-q", "-o", out]
+        files = []
+        for k, data in enumerate(inputs):
+            files.append(os.path.join(folder, f"in{k:05}.exr"))
+            with open(files[-1], "wb") as f:
+                f.write(data)
+        out = os.path.join(folder, "out.exr")
+        cmd = [glint, *args, *files, "-q", "-o", out]
         done = subprocess.run(cmd, capture_output=True, text=True, preexec_fn=_die_with_parent)
         # Exit code 1 is glint refusing its input: the same input fails the same way.
         if done.returncode == 1:
@@ -62,6 +68,18 @@ def render_part(glint: str, args: list[str], samples: tuple[int, int]) -> bytes:
             return f.read()
     finally:
         shutil.rmtree(folder, ignore_errors=True)
+
+
+@ray.remote(num_cpus=1, max_retries=WORKER_RETRIES, retry_exceptions=[PartKilled])
+def render_part(glint: str, args: list[str], samples: tuple[int, int]) -> bytes:
+    """Renders samples ``samples[0]..samples[1]`` with ``glint``; returns the part file."""
+    return run_glint(glint, ["render", *args, "--samples", f"{samples[0]}..{samples[1]}"])
+
+
+@ray.remote(num_cpus=1, max_retries=WORKER_RETRIES, retry_exceptions=[PartKilled])
+def merge_group(glint: str, *parts: bytes) -> bytes:
+    """Merges part files into one part (``glint merge --part``), on a worker."""
+    return run_glint(glint, ["merge", "--part"], list(parts))
 
 
 def split(spp: int, parts: int) -> list[tuple[int, int]]:
@@ -85,10 +103,12 @@ def parse_args(argv: list[str] | None) -> argparse.Namespace:
     r.add_argument("--height", type=int, help="image height (overrides the scene's camera)")
     r.add_argument("--seed", type=int, help="random seed (overrides the scene's settings)")
     r.add_argument("--set", action="append", default=[], metavar="KEY=VALUE", help="override a setting, as in glint")
+    r.add_argument("--merge-group", type=int, default=32,
+                   help="with more parts than this, workers merge groups of this many first")
     r.add_argument("-q", "--quiet", action="store_true", help="no progress lines")
     a = p.parse_args(argv)
-    if a.spp < 1 or a.parts < 1:
-        p.error("--spp and --parts must be at least 1")
+    if a.spp < 1 or a.parts < 1 or a.merge_group < 2:
+        p.error("--spp and --parts must be at least 1, --merge-group at least 2")
     return a
 
 
@@ -120,49 +140,68 @@ def render(a: argparse.Namespace) -> int:
     args = glint_args(a)
     task = render_part.options(num_cpus=a.threads)
     pending = {task.remote(glint, args, r): i for i, r in enumerate(ranges)}
-    results: dict[int, bytes] = {}
+    done: dict[int, ray.ObjectRef] = {}
     while pending:
         ready, _ = ray.wait(list(pending), num_returns=1)
         i = pending.pop(ready[0])
         try:
-            results[i] = ray.get(ready[0])
+            # Only to see whether it failed: the bytes stay in Ray's object store.
+            ray.get(ready[0])
         except (GlintFailed, ray.exceptions.RayError) as e:
             for ref in pending:
                 ray.cancel(ref, force=True)
-            if isinstance(e, GlintFailed):
-                # glint's own message, which names the file and field.
-                cause = getattr(e, "cause", e)
-                print(cause.args[0] if cause.args else str(cause), file=sys.stderr)
-            else:
-                a0, b0 = ranges[i]
-                print(f"error: part {i} (samples {a0}..{b0}) failed after {WORKER_RETRIES} retries: {e}",
-                      file=sys.stderr)
+            report(e, f"part {i} (samples {ranges[i][0]}..{ranges[i][1]})")
             return 1
+        done[i] = ready[0]
         if not a.quiet:
             print(
-                f"glint-ray: {len(results)}/{len(ranges)} parts done ({time.monotonic() - start:.1f} s)",
+                f"glint-ray: {len(done)}/{len(ranges)} parts done ({time.monotonic() - start:.1f} s)",
                 file=sys.stderr,
             )
+    refs = [done[i] for i in sorted(done)]
+    if len(refs) > a.merge_group:
+        # Merge groups on the workers first, so the driver merges few files.
+        groups = [refs[k : k + a.merge_group] for k in range(0, len(refs), a.merge_group)]
+        merges = [merge_group.remote(glint, *g) for g in groups]
+        try:
+            ray.get(merges)
+        except (GlintFailed, ray.exceptions.RayError) as e:
+            report(e, "a group merge")
+            return 1
+        refs = merges
+    code = merge_locally(local_glint, [ray.get(r) for r in refs], a.output, a.quiet)
+    if not a.quiet:
+        print(
+            f"glint-ray: Ray started in {start - started:.1f} s, {len(ranges)} parts rendered "
+            f"and merged in {time.monotonic() - start:.1f} s",
+            file=sys.stderr,
+        )
+    return code
+
+
+def report(e: Exception, what: str) -> None:
+    """Prints why the job failed: glint's own message, or which task ran out of retries."""
+    if isinstance(e, GlintFailed):
+        # glint's own message, which names the file and field.
+        cause = getattr(e, "cause", e)
+        print(cause.args[0] if cause.args else str(cause), file=sys.stderr)
+    else:
+        print(f"error: {what} failed after {WORKER_RETRIES} retries: {e}", file=sys.stderr)
+
+
+def merge_locally(glint: str, parts: list[bytes], output: str, quiet: bool) -> int:
+    """``glint merge`` of the part files into the image ``output``; its exit code."""
     folder = tempfile.mkdtemp(prefix="glint-ray-merge-")
     try:
         files = []
-        for i in sorted(results):
-            path = os.path.join(folder, f"part{i:05}.exr")
-            with open(path, "wb") as f:
-                f.write(results[i])
-            files.append(path)
-        merge = [local_glint, "merge", *files, "-o", a.output]
-        if a.quiet:
+        for k, data in enumerate(parts):
+            files.append(os.path.join(folder, f"part{k:05}.exr"))
+            with open(files[-1], "wb") as f:
+                f.write(data)
+        merge = [glint, "merge", *files, "-o", output]
+        if quiet:
             merge.append("-q")
-        code = subprocess.run(merge).returncode
-        if not a.quiet:
-            now = time.monotonic()
-            print(
-                f"glint-ray: Ray started in {start - started:.1f} s, {len(ranges)} parts rendered "
-                f"and merged in {now - start:.1f} s",
-                file=sys.stderr,
-            )
-        return code
+        return subprocess.run(merge).returncode
     finally:
         shutil.rmtree(folder, ignore_errors=True)
 

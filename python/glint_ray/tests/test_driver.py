@@ -67,7 +67,8 @@ def test_a_killed_worker_is_retried_and_the_result_is_bit_identical(tmp_path):
     subprocess.run([glint, "render", str(scene), "--set", f"pixel_samples={SPP}", *SIZE,
                     "-q", "-o", str(single)], check=True)
     merged = tmp_path / "merged.exr"
-    job = driver(glint, scene, merged)
+    # Groups of 4: the workers merge two groups, the driver merges those two.
+    job = driver(glint, scene, merged, "--merge-group", "4")
     killed = []
 
     def kill_one_worker():
