@@ -75,6 +75,9 @@ pub enum GlintError {
         /// The image `[width, height]`.
         size: [u32; 2],
     },
+    /// A part of a render cannot be read, or parts cannot be merged (names the file).
+    #[error("{0}")]
+    Part(String),
     /// The reference image of a converge run cannot be used.
     #[error("{0}")]
     Reference(String),

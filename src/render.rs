@@ -10,6 +10,7 @@ use bevy_ecs::prelude::*;
 use crate::error::{GlintError, Result};
 use crate::film::Film;
 use crate::film::estimate::{ErrorEstimate, EstimateMethod};
+use crate::film::part::{Crop, Part, PartInfo, crop_film};
 use crate::memory;
 use crate::sampling::{pixel_mode, samples_per_pixel};
 use crate::scene::format::SceneFile;
@@ -381,6 +382,74 @@ impl Renderer {
     pub fn error_estimate(&self) -> Option<ErrorEstimate> {
         self.film()
             .error_estimate(EstimateMethod::for_settings(self.settings()))
+    }
+
+    /// Renders sample indices `samples` over the window `crop` only (a part of a split
+    /// render, see [`crate::film::part`]): the pixels outside stay empty. Stops between
+    /// regions if the interrupt flag is set (`interrupted` in the summary).
+    pub fn render_part(
+        &mut self,
+        samples: std::ops::Range<u32>,
+        crop: Crop,
+        progress: &mut dyn FnMut(u64),
+    ) -> Result<RenderSummary> {
+        self.prepare()?;
+        let start = self.started.unwrap_or_else(Instant::now);
+        let (width, height) = (self.film().width, self.film().height);
+        crop.check(width, height).map_err(GlintError::Setting)?;
+        let n = self.samples_per_pixel();
+        if samples.start >= samples.end || samples.end > n {
+            return Err(GlintError::Setting(format!(
+                "the sample range {}..{} is not a non-empty part of the render's 0..{n}",
+                samples.start, samples.end
+            )));
+        }
+        let mut control = Control {
+            interrupt: self.interrupt.clone(),
+            budget: None,
+            start,
+            progress,
+        };
+        let rows = crop.pixel_ranges(width);
+        let mut done = 0;
+        'passes: for sample in samples.clone() {
+            for pixels in &rows {
+                if !run_pass(&mut self.world, sample, pixels.clone(), &mut control)? {
+                    break 'passes;
+                }
+            }
+            done += 1;
+        }
+        let mut summary = self.summary(done, start.elapsed());
+        summary.width = crop.width();
+        summary.height = crop.height();
+        summary.interrupted = done < samples.len() as u32;
+        Ok(summary)
+    }
+
+    /// The settings and camera as one line of text: parts of a split render must agree
+    /// on it.
+    pub fn settings_text(&mut self) -> String {
+        let settings = ron::to_string(self.settings()).unwrap_or_default();
+        format!("{settings} camera {:?}", self.camera())
+    }
+
+    /// The part of the film that [`Renderer::render_part`] rendered, for `glint merge`.
+    pub fn part(&mut self, scene_hash: String, samples: std::ops::Range<u32>, crop: Crop) -> Part {
+        let film = self.film();
+        let (width, height) = (film.width, film.height);
+        let film = crop_film(film, crop);
+        Part {
+            info: PartInfo {
+                scene_hash,
+                settings: self.settings_text(),
+                width,
+                height,
+                samples,
+                crop,
+            },
+            film,
+        }
     }
 
     /// A summary of the run so far.

@@ -60,10 +60,10 @@ fn a_film_larger_than_memory_is_refused_before_the_render() {
         "out.png",
     ];
     let line = refusal(dir.path(), glint(dir.path(), "256M", &args));
-    // 8192² pixels of 96 bytes.
+    // 8192² pixels of 120 bytes.
     assert_mentions(
         &line,
-        &["8192x8192 film", "6.4 GB", "268.4 MB", "GLINT_MAX_MEMORY"],
+        &["8192x8192 film", "8.1 GB", "268.4 MB", "GLINT_MAX_MEMORY"],
     );
     let fits = glint(
         dir.path(),

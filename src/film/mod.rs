@@ -2,6 +2,7 @@
 
 pub mod estimate;
 pub mod metrics;
+pub mod part;
 pub mod text;
 
 use std::io::Write;
@@ -33,6 +34,10 @@ pub struct Film {
     pub replica_sum: Vec<DVec3>,
     /// Number of finite samples of odd sample index.
     pub replica_count: Vec<u32>,
+    /// The rounding error of each `sum` (`sum + err` is the exact sum of the samples):
+    /// it makes the mean independent of the order samples were added in, so a render
+    /// split into parts merges bit-identically (see [`part`]).
+    pub err: Vec<DVec3>,
 }
 
 impl Film {
@@ -47,12 +52,13 @@ impl Film {
             m2: vec![DVec3::ZERO; n],
             replica_sum: vec![DVec3::ZERO; n],
             replica_count: vec![0; n],
+            err: vec![DVec3::ZERO; n],
         }
     }
 
-    /// Bytes a render holds per pixel: the film's five buffers and the image written
+    /// Bytes a render holds per pixel: the film's six buffers and the image written
     /// from it.
-    pub const BYTES_PER_PIXEL: u64 = (3 * size_of::<DVec3>() + 2 * size_of::<u32>() + 16) as u64;
+    pub const BYTES_PER_PIXEL: u64 = (4 * size_of::<DVec3>() + 2 * size_of::<u32>() + 16) as u64;
 
     /// An empty film, allocated fallibly: [`GlintError::Memory`] rather than an abort
     /// when the allocator refuses (the estimate is checked before, in `Renderer::prepare`).
@@ -73,6 +79,7 @@ impl Film {
                 m2: zeroed(n)?,
                 replica_sum: zeroed(n)?,
                 replica_count: zeroed(n)?,
+                err: zeroed(n)?,
             })
         })();
         film.ok_or_else(|| {
@@ -91,7 +98,7 @@ impl Film {
     fn mean(&self, i: usize) -> Vec3 {
         match self.count[i] {
             0 => Vec3::ZERO,
-            n => (self.sum[i] / n as f64).as_vec3(),
+            n => ((self.sum[i] + self.err[i]) / n as f64).as_vec3(),
         }
     }
 
@@ -112,11 +119,12 @@ pub fn accumulate_film(
     let film = &mut *film;
     let dropped: u64 = film.sum[start..end]
         .par_iter_mut()
+        .zip(&mut film.err[start..end])
         .zip(&mut film.count[start..end])
         .zip(&radiance.values)
-        .map(|((sum, count), c)| {
+        .map(|(((sum, err), count), c)| {
             if c.is_finite() {
-                *sum += c.as_dvec3();
+                add_exact(sum, err, c.as_dvec3());
                 *count += 1;
                 0
             } else {
@@ -126,6 +134,17 @@ pub fn accumulate_film(
         .sum();
     stats.nonfinite_samples += dropped;
     stats.record(Stage::AccumulateFilm, radiance.values.len() as u64);
+}
+
+/// Adds `x` to the sum `(sum, err)` without losing a bit: `sum` is rounded as a plain
+/// `+=` would be (Knuth's two-sum), `err` collects what the rounding lost. While `err`'s
+/// own additions are exact, which holds unless one pixel's samples span more than about
+/// 80 binades, `sum + err` is the exact total whatever the order of the additions.
+pub fn add_exact(sum: &mut DVec3, err: &mut DVec3, x: DVec3) {
+    let s = *sum + x;
+    let b = s - *sum;
+    *err += (*sum - (s - b)) + (x - b);
+    *sum = s;
 }
 
 /// How 8-bit outputs encode linear values.

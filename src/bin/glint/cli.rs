@@ -26,6 +26,9 @@ pub enum Command {
     Converge(ConvergeArgs),
     /// Explain one pixel: a debug image of its rays, BVH, lights, texture and samples.
     Debug(DebugCmd),
+    /// Merge parts of a split render (`glint render --samples/--crop -o part.exr`) into
+    /// one image, bit-identical to a single render of all their samples.
+    Merge(MergeArgs),
     /// Run the numerical stress suite (extreme scales, edges, grazing rays, degenerate
     /// input...) and print a table of measurements; fails if any case fails.
     Stress(StressArgs),
@@ -143,6 +146,34 @@ pub struct RenderArgs {
     /// No progress bar and no summary line.
     #[arg(short, long)]
     pub quiet: bool,
+    /// Render only sample indices A..B (B excluded) and write a part for `glint merge`
+    /// (EXR output).
+    #[arg(long, value_name = "A..B", value_parser = parse_samples, conflicts_with = "time")]
+    pub samples: Option<std::ops::Range<u32>>,
+    /// Render only the window X0,Y0,X1,Y1 (columns X0..X1, rows Y0..Y1, row 0 at the
+    /// top) and write a part for `glint merge` (EXR output).
+    #[arg(long, value_name = "X0,Y0,X1,Y1", value_parser = parse_crop, conflicts_with = "time")]
+    pub crop: Option<glint::film::part::Crop>,
+}
+
+#[derive(Args, Debug)]
+pub struct MergeArgs {
+    /// The part files (EXR) written by `glint render --samples/--crop`.
+    #[arg(required = true)]
+    pub parts: Vec<PathBuf>,
+    /// Output image; `.png` or `.exr`.
+    #[arg(short, long)]
+    pub output: PathBuf,
+    /// Encode PNG output with the sRGB curve instead of clamped linear values.
+    #[arg(long)]
+    pub srgb: bool,
+    /// No summary line.
+    #[arg(short, long)]
+    pub quiet: bool,
+    /// Write the merge as a part (EXR) instead of an image, to merge again with others:
+    /// merges can form a tree, exactly.
+    #[arg(long)]
+    pub part: bool,
 }
 
 #[derive(Args, Debug)]
@@ -236,6 +267,34 @@ fn parse_numbers<T: std::str::FromStr>(
         Some(v) if v.len() == n => Ok(v),
         _ => Err(format!("expected {what}, got \"{s}\"")),
     }
+}
+
+fn parse_samples(s: &str) -> Result<std::ops::Range<u32>, String> {
+    let v = s
+        .split_once("..")
+        .and_then(|(a, b)| Some((a.trim().parse::<u32>().ok()?, b.trim().parse::<u32>().ok()?)));
+    match v {
+        Some((a, b)) if a < b => Ok(a..b),
+        Some(_) => Err(format!("the sample range must not be empty, got \"{s}\"")),
+        None => Err(format!(
+            "expected A..B (sample indices A to B-1), got \"{s}\""
+        )),
+    }
+}
+
+fn parse_crop(s: &str) -> Result<glint::film::part::Crop, String> {
+    let v = parse_numbers::<u32>(s, ',', 4, "X0,Y0,X1,Y1")?;
+    if v[0] >= v[2] || v[1] >= v[3] {
+        return Err(format!(
+            "the crop must have X0 < X1 and Y0 < Y1, got \"{s}\""
+        ));
+    }
+    Ok(glint::film::part::Crop {
+        x0: v[0],
+        y0: v[1],
+        x1: v[2],
+        y1: v[3],
+    })
 }
 
 fn parse_pixel(s: &str) -> Result<[u32; 2], String> {

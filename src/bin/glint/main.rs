@@ -4,6 +4,7 @@
 mod cli;
 mod converge;
 mod debug;
+mod merge;
 mod render;
 mod stress;
 
@@ -115,6 +116,7 @@ fn main() -> ExitCode {
         Command::Info(a) => info(a).map(|()| None),
         Command::Converge(a) => converge::run(a),
         Command::Debug(a) => debug::run(a).map(|()| None),
+        Command::Merge(a) => merge::run(a).map(|()| None),
         Command::Stress(a) => stress::run(a).map(|()| None),
     };
     match result {

@@ -11,14 +11,14 @@ use indicatif::{ProgressBar, ProgressStyle};
 use crate::cli::RenderArgs;
 use crate::{CliError, CliResult, Interrupted, check_settings, ctrl_c_flag, set_threads};
 
-fn default_output(scene: &Path) -> PathBuf {
+pub fn default_output(scene: &Path) -> PathBuf {
     let stem = scene.file_stem().unwrap_or_default().to_string_lossy();
     PathBuf::from(format!("{stem}.png"))
 }
 
 /// Fails on an output glint could not write, before any time is spent on the render:
 /// an unknown format, a folder in its place, a missing or unwritable folder.
-fn check_output(output: &Path) -> CliResult<()> {
+pub fn check_output(output: &Path) -> CliResult<()> {
     let flag = |why: String| Err(CliError::Flag(format!("{}: {why}", output.display())));
     match output.extension().and_then(|e| e.to_str()) {
         Some(e) if e.eq_ignore_ascii_case("png") || e.eq_ignore_ascii_case("exr") => {}
@@ -50,8 +50,26 @@ fn partial_path(output: &Path) -> PathBuf {
     output.with_file_name(format!("{stem}.partial.{ext}"))
 }
 
+/// A progress bar over `total` pixel samples on a terminal, hidden otherwise.
+pub fn progress_bar(quiet: bool, total: u64) -> ProgressBar {
+    if quiet || !std::io::stderr().is_terminal() {
+        return ProgressBar::hidden();
+    }
+    let bar = ProgressBar::new(total);
+    bar.set_style(
+        ProgressStyle::with_template(
+            "{spinner} [{elapsed_precise}] {wide_bar} {percent}% (eta {eta})",
+        )
+        .expect("valid template"),
+    );
+    bar
+}
+
 /// Renders, writes the image and prints the summary (or why the image is partial).
 pub fn run(args: &RenderArgs) -> CliResult<Option<Interrupted>> {
+    if args.samples.is_some() || args.crop.is_some() {
+        return crate::merge::render_part(args);
+    }
     set_threads(args.threads)?;
     let output = args
         .output
@@ -72,9 +90,7 @@ pub fn run(args: &RenderArgs) -> CliResult<Option<Interrupted>> {
         target_rel_error: args.target_rel_error,
     };
     let targeted = rule.target_rmse.is_some() || rule.target_rel_error.is_some();
-    let bar = if args.quiet || !std::io::stderr().is_terminal() {
-        ProgressBar::hidden()
-    } else if targeted {
+    let bar = if targeted && !args.quiet && std::io::stderr().is_terminal() {
         // The number of passes is not known in advance: count pixel samples instead.
         let bar = ProgressBar::new_spinner();
         bar.set_style(
@@ -83,14 +99,7 @@ pub fn run(args: &RenderArgs) -> CliResult<Option<Interrupted>> {
         );
         bar
     } else {
-        let bar = ProgressBar::new(total);
-        bar.set_style(
-            ProgressStyle::with_template(
-                "{spinner} [{elapsed_precise}] {wide_bar} {percent}% (eta {eta})",
-            )
-            .expect("valid template"),
-        );
-        bar
+        progress_bar(args.quiet, total)
     };
     let summary = renderer.render_until(&rule, &mut |n| bar.inc(n))?;
     bar.finish_and_clear();
