@@ -400,7 +400,7 @@ fn load_model(path: &Path) -> Result<Vec<[Vec3; 3]>, String> {
 }
 
 fn bench_models(c: &mut Criterion) {
-    let assets = Path::new(concat!(env!("CARGO_MANIFEST_DIR"), "/../shared/assets"));
+    let assets = Path::new(concat!(env!("CARGO_MANIFEST_DIR"), "/../../shared/assets"));
     if !assets.is_dir() {
         eprintln!(
             "skipping the real-model BVH benchmarks: {} is absent",

@@ -1,0 +1,1 @@
+//! glint's benchmarks live in `benches/`; this library is empty.
