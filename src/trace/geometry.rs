@@ -9,7 +9,6 @@ use crate::accel::sphere::{sphere_roots, sphere_uv};
 use crate::accel::triangle::{RayShear, intersect_triangle_sheared};
 use crate::accel::{
     Aabb, Bvh, Ray, SplitMethod, TraversalStats, TraversalVisitor, intersect_sphere,
-    intersect_triangle,
 };
 use crate::scene::{Acceleration, BvhSplit, Mesh, Settings, Sphere, Transform};
 use crate::stats::{RenderStats, Stage};
@@ -159,22 +158,24 @@ impl SceneGeometry {
         if !self.tri_bvh.nodes.is_empty() {
             visitor.begin_hierarchy(PrimKind::Triangle);
             let shear = RayShear::new(ray);
+            // The traversal keeps a hit only when it is closer than the closest so far,
+            // and the test returns only such hits: the last one returned is the winner,
+            // so its barycentrics are kept here instead of re-running its test.
+            let mut last = None;
             let found = self.tri_bvh.closest_hit(ray, t_max, visitor, |p, tm| {
                 let [a, b, c] = self.tri_positions[p as usize];
-                intersect_triangle_sheared(&shear, ray.origin, a, b, c, tm).map(|h| h.t)
+                let h = intersect_triangle_sheared(&shear, ray.origin, a, b, c, tm)?;
+                last = Some(h);
+                Some(h.t)
             });
-            if let Some((prim, _)) = found {
-                // Re-run the winning test for its barycentrics; it is deterministic.
-                let [a, b, c] = self.tri_positions[prim as usize];
-                if let Some(h) = intersect_triangle_sheared(&shear, ray.origin, a, b, c, t_max) {
-                    t_max = h.t;
-                    best = Some(Hit {
-                        t: h.t,
-                        prim,
-                        kind: PrimKind::Triangle,
-                        bary: Vec3::new(h.b0, h.b1, h.b2),
-                    });
-                }
+            if let (Some((prim, _)), Some(h)) = (found, last) {
+                t_max = h.t;
+                best = Some(Hit {
+                    t: h.t,
+                    prim,
+                    kind: PrimKind::Triangle,
+                    bary: Vec3::new(h.b0, h.b1, h.b2),
+                });
             }
         }
         if !self.sphere_bvh.nodes.is_empty() {
@@ -197,11 +198,14 @@ impl SceneGeometry {
 
     /// Whether anything lies on the ray in (0, t_max).
     pub fn occluded(&self, ray: &Ray, t_max: f32, visitor: &mut impl GeometryVisitor) -> bool {
-        let tris = !self.tri_bvh.nodes.is_empty()
-            && self.tri_bvh.any_hit(ray, t_max, visitor, |p| {
+        // The shear is per ray: computed once here, not in every triangle test.
+        let tris = !self.tri_bvh.nodes.is_empty() && {
+            let shear = RayShear::new(ray);
+            self.tri_bvh.any_hit(ray, t_max, visitor, |p| {
                 let [a, b, c] = self.tri_positions[p as usize];
-                intersect_triangle(ray, a, b, c, t_max).is_some()
-            });
+                intersect_triangle_sheared(&shear, ray.origin, a, b, c, t_max).is_some()
+            })
+        };
         tris || (!self.sphere_bvh.nodes.is_empty()
             && self.sphere_bvh.any_hit(ray, t_max, visitor, |p| {
                 let s = &self.spheres[p as usize];
@@ -224,14 +228,10 @@ impl SceneGeometry {
         let mut crossings = Crossings::default();
         let opaque = |material: u32| materials.list[material as usize].alpha >= 1.0;
         if !self.tri_bvh.nodes.is_empty() {
+            let shear = RayShear::new(ray);
             let blocked = self.tri_bvh.any_hit(ray, t_max, visitor, |p| {
-                let Some(h) = intersect_triangle(
-                    ray,
-                    self.tri_positions[p as usize][0],
-                    self.tri_positions[p as usize][1],
-                    self.tri_positions[p as usize][2],
-                    t_max,
-                ) else {
+                let [a, b, c] = self.tri_positions[p as usize];
+                let Some(h) = intersect_triangle_sheared(&shear, ray.origin, a, b, c, t_max) else {
                     return false;
                 };
                 let material = self.tri_material[p as usize];
