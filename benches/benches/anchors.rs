@@ -5,7 +5,8 @@
 //! Mrays/s and the ratio glint ÷ peer as the median and the range over the
 //! rounds; then build times and glint's bytes per triangle.
 //!
-//! Peers: `obvhs` (CWBVH, always), Embree 4 when `GLINT_EMBREE_LIB` names its
+//! glint is the 4-wide BVH the render traverses; `glint-binary` is the binary
+//! tree it is collapsed from. Peers: `obvhs` (CWBVH, always), Embree 4 when `GLINT_EMBREE_LIB` names its
 //! library (see `glint_bench::embree`). tinybvh is not a row: `tinybvh-rs`
 //! compiles its C++ with `-march=native` and only exposes the BVH8_CPU
 //! traversal under `cfg(target_feature = "avx2")`, which needs the whole
@@ -18,7 +19,7 @@ use std::hint::black_box;
 use std::time::{Duration, Instant};
 
 use glam::{Vec3, Vec3A};
-use glint::accel::{Aabb, Bvh, Ray, SplitMethod};
+use glint::accel::{Aabb, Bvh, Ray, SplitMethod, WideBvh};
 use glint_bench::embree::{Embree, EmbreeScene};
 use glint_bench::{
     View, assets_dir, displaced_torus, find_file, glint_closest, glint_occluded, incoherent_rays,
@@ -43,7 +44,10 @@ fn median(v: &mut [f64]) -> f64 {
 
 /// One library's view of a mesh: how to trace a ray set, counting hits.
 enum Peer<'a> {
-    Glint(&'a Bvh, &'a [[Vec3; 3]]),
+    /// What the render traverses: the 4-wide BVH.
+    Glint(&'a WideBvh),
+    /// The binary BVH it is collapsed from (what the render traversed before).
+    GlintBinary(&'a Bvh, &'a [[Vec3; 3]]),
     Obvhs(&'a CwBvh, &'a [Triangle]),
     Embree(&'a EmbreeScene<'a>),
 }
@@ -52,6 +56,7 @@ impl Peer<'_> {
     fn name(&self) -> &'static str {
         match self {
             Peer::Glint(..) => "glint",
+            Peer::GlintBinary(..) => "glint-binary",
             Peer::Obvhs(..) => "obvhs",
             Peer::Embree(..) => "embree",
         }
@@ -60,7 +65,16 @@ impl Peer<'_> {
     fn trace(&self, rays: &[Ray], shadow: bool) -> u32 {
         let mut hits = 0u32;
         match self {
-            Peer::Glint(bvh, tris) => {
+            Peer::Glint(wide) => {
+                for r in rays {
+                    hits += if shadow {
+                        wide.any_hit(r, 1.0, |_, _| true) as u32
+                    } else {
+                        wide.closest_hit(r, f32::INFINITY).is_some() as u32
+                    };
+                }
+            }
+            Peer::GlintBinary(bvh, tris) => {
                 for r in rays {
                     hits += if shadow {
                         glint_occluded(bvh, tris, r) as u32
@@ -136,6 +150,12 @@ fn bench_mesh(label: &str, tris: &[[Vec3; 3]], view: &View, embree: Option<&Embr
     let (g, glo, ghi) = time_ms(build_rounds, || {
         black_box(one_thread.install(|| Bvh::build(&bounds, SplitMethod::SahBinned)));
     });
+    let (w, wlo, whi) = time_ms(build_rounds, || {
+        black_box(
+            one_thread
+                .install(|| WideBvh::collapse(&Bvh::build(&bounds, SplitMethod::SahBinned), tris)),
+        );
+    });
     let (o, olo, ohi) = time_ms(build_rounds, || {
         black_box(build_cwbvh_from_tris(
             &otris,
@@ -145,6 +165,7 @@ fn bench_mesh(label: &str, tris: &[[Vec3; 3]], view: &View, embree: Option<&Embr
     });
     println!("build (1 thread, ms, median [min-max]):");
     println!("  glint SAH     {g:9.1} [{glo:.1}-{ghi:.1}]");
+    println!("  glint SAH+4   {w:9.1} [{wlo:.1}-{whi:.1}] (binary, then collapsed to 4-wide)");
     println!("  obvhs medium  {o:9.1} [{olo:.1}-{ohi:.1}]");
     if let Some(e) = embree {
         let (m, lo, hi) = time_ms(build_rounds, || {
@@ -154,14 +175,19 @@ fn bench_mesh(label: &str, tris: &[[Vec3; 3]], view: &View, embree: Option<&Embr
     }
 
     let bvh = Bvh::build(&bounds, SplitMethod::SahBinned);
-    let bytes = size_of_val(bvh.nodes.as_slice())
-        + size_of_val(bvh.prim_indices.as_slice())
-        + size_of_val(tris);
+    let wide = WideBvh::collapse(&bvh, tris);
+    let per_tri = |bytes: usize| bytes as f64 / tris.len() as f64;
+    let binary = size_of_val(bvh.nodes.as_slice()) + size_of_val(bvh.prim_indices.as_slice());
     println!(
-        "glint memory: {} nodes ({:.2}/tri), {:.1} bytes/tri (nodes + indices + positions)",
+        "glint memory, bytes/tri: binary {} nodes ({:.2}/tri) + indices {:.1}; \
+         4-wide {} nodes, depth {}, + leaf-order triangles + indices {:.1}; positions {:.1}",
         bvh.nodes.len(),
         bvh.nodes.len() as f64 / tris.len() as f64,
-        bytes as f64 / tris.len() as f64
+        per_tri(binary),
+        wide.nodes.len(),
+        wide.depth,
+        per_tri(wide.bytes()),
+        per_tri(size_of_val(tris)),
     );
     let cw = build_cwbvh_from_tris(
         &otris,
@@ -169,7 +195,11 @@ fn bench_mesh(label: &str, tris: &[[Vec3; 3]], view: &View, embree: Option<&Embr
         &mut Duration::default(),
     );
     let escene = embree.map(|e| e.scene(tris).unwrap());
-    let mut peers = vec![Peer::Glint(&bvh, tris), Peer::Obvhs(&cw, &otris)];
+    let mut peers = vec![
+        Peer::Glint(&wide),
+        Peer::GlintBinary(&bvh, tris),
+        Peer::Obvhs(&cw, &otris),
+    ];
     if let Some(s) = &escene {
         peers.push(Peer::Embree(s));
     }
