@@ -70,6 +70,7 @@ fn the_bvh_built_by_the_schedule_validates_and_covers_every_triangle() {
         .map(|p| Aabb::from_points(p))
         .collect();
     g.tri_bvh.validate(&bounds).unwrap();
+    g.tri_wide.validate(&g.tri_positions).unwrap();
     let mut covered = g.tri_bvh.prim_indices.clone();
     covered.sort_unstable();
     assert_eq!(covered, (0..34).collect::<Vec<u32>>());

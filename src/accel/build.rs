@@ -43,13 +43,22 @@ impl Bvh {
             split,
         };
         let mut prim_indices: Vec<u32> = (0..bounds.len() as u32).collect();
-        let mut nodes = Vec::with_capacity(bounds.len() / 2 + 1);
+        let mut nodes = Vec::with_capacity(node_estimate(bounds.len()));
         build_node(&ctx, &mut prim_indices, 0, 1, &mut nodes);
+        // The estimate may overshoot (smaller leaves): give back what is unused.
+        nodes.shrink_to_fit();
         Bvh {
             nodes,
             prim_indices,
         }
     }
+}
+
+/// Nodes to reserve for `n` primitives: SAH leaves hold 3.3 primitives on average
+/// (0.61 nodes per primitive on the procedural meshes and the asset models), so
+/// 2/3 of a node each avoids the reallocation (and its doubled peak) of n/2.
+fn node_estimate(n: usize) -> usize {
+    n / 3 * 2 + 2
 }
 
 /// Appends the subtree over `indices` to `out`. Child offsets are indices into
@@ -74,12 +83,12 @@ fn build_node(ctx: &Ctx, indices: &mut [u32], prim_base: u32, depth: u32, out: &
     if n >= PARALLEL_MIN {
         let (l, r) = rayon::join(
             || {
-                let mut v = Vec::new();
+                let mut v = Vec::with_capacity(node_estimate(left.len()));
                 build_node(ctx, left, prim_base, depth + 1, &mut v);
                 v
             },
             || {
-                let mut v = Vec::new();
+                let mut v = Vec::with_capacity(node_estimate(right.len()));
                 build_node(ctx, right, right_base, depth + 1, &mut v);
                 v
             },

@@ -9,6 +9,7 @@
 //! - [`sphere`]: precise ray/sphere intersection (Haines et al., Ray Tracing Gems ch. 7).
 //! - [`bvh`] and [`build`]: a flat depth-first BVH with binned-SAH and median builders.
 //! - [`traverse`]: closest-hit and any-hit traversal of that BVH.
+//! - [`wide`]: that BVH collapsed to 4-wide nodes with triangles in leaf order, for the render.
 
 use glam::Vec3;
 
@@ -18,12 +19,14 @@ pub mod bvh;
 pub mod sphere;
 pub mod traverse;
 pub mod triangle;
+pub mod wide;
 
 pub use aabb::Aabb;
 pub use bvh::{Bvh, BvhNode, SplitMethod};
 pub use sphere::intersect_sphere;
 pub use traverse::{TraversalStats, TraversalVisitor};
 pub use triangle::{RayShear, TriangleHit, intersect_triangle, intersect_triangle_sheared};
+pub use wide::WideBvh;
 
 /// A ray; `dir` need not be unit length (t is in units of `dir`).
 #[derive(Clone, Copy, Debug, PartialEq)]

@@ -47,7 +47,7 @@ struct Entry {
 const STACK_SIZE: usize = MAX_DEPTH as usize;
 
 impl Bvh {
-    /// Closest hit: `hit(prim, t_max)` returns Some(t) for a hit closer than t_max. Returns the closest (prim, t).
+    /// Closest hit: `hit(prim, t_max)` returns Some(t) for a hit closer than t_max. Returns the closest (prim, t); of equally close ones, the lowest prim.
     pub fn closest_hit(
         &self,
         ray: &Ray,
@@ -77,8 +77,16 @@ impl Bvh {
                     for k in node.offset..node.offset + node.count {
                         let prim = self.prim_indices[k as usize];
                         visitor.test_prim(prim);
-                        if let Some(t) = hit(prim, best_t)
-                            && t < best_t
+                        // Up to and including the best t so far: of primitives hit at
+                        // exactly the same t (where two meet), the lowest index wins,
+                        // whatever the order of the tree (the wide BVH agrees).
+                        let bound = if best.is_some() {
+                            best_t.next_up()
+                        } else {
+                            best_t
+                        };
+                        if let Some(t) = hit(prim, bound)
+                            && best.is_none_or(|(bp, bt)| t < bt || (t == bt && prim < bp))
                         {
                             best_t = t;
                             best = Some((prim, t));

@@ -6,10 +6,9 @@ use glam::{Vec2, Vec3};
 
 use super::materials::Materials;
 use crate::accel::sphere::{sphere_roots, sphere_uv};
-use crate::accel::triangle::{RayShear, intersect_triangle_sheared};
+use crate::accel::triangle::{RayShear, TriangleHit, intersect_triangle_sheared};
 use crate::accel::{
-    Aabb, Bvh, Ray, SplitMethod, TraversalStats, TraversalVisitor, intersect_sphere,
-    intersect_triangle,
+    Aabb, Bvh, Ray, SplitMethod, TraversalStats, TraversalVisitor, WideBvh, intersect_sphere,
 };
 use crate::scene::{Acceleration, BvhSplit, Mesh, Settings, Sphere, Transform};
 use crate::stats::{RenderStats, Stage};
@@ -26,11 +25,16 @@ pub enum PrimKind {
 /// Observes a query over the scene's hierarchies: the BVH visitor, told which
 /// hierarchy it is in so node and primitive ids can be told apart.
 pub trait GeometryVisitor: TraversalVisitor {
+    /// Whether it observes anything: queries for a visitor that does not take the
+    /// 4-wide triangle BVH, whose nodes are not the binary ones the observers name.
+    const OBSERVES: bool = true;
     /// Called before traversing the hierarchy over primitives of `kind`.
     fn begin_hierarchy(&mut self, _kind: PrimKind) {}
 }
 
-impl GeometryVisitor for () {}
+impl GeometryVisitor for () {
+    const OBSERVES: bool = false;
+}
 
 impl GeometryVisitor for TraversalStats {}
 
@@ -60,6 +64,9 @@ pub struct SceneGeometry {
     pub tri_material: Vec<u32>,
     /// Hierarchy over the triangles.
     pub tri_bvh: Bvh,
+    /// `tri_bvh` collapsed to 4-wide nodes with the triangles in leaf order: what
+    /// unobserved queries traverse (empty: they use `tri_bvh`).
+    pub tri_wide: WideBvh,
     /// Spheres (world space).
     pub spheres: Vec<Sphere>,
     /// Material index of each sphere.
@@ -117,6 +124,7 @@ pub fn build_triangle_bvh(
         .map(|p| Aabb::from_points(p))
         .collect();
     g.tri_bvh = build(&bounds, &settings);
+    g.collapse_triangle_bvh();
     stats.record(Stage::BuildTriangleBvh, bounds.len() as u64);
 }
 
@@ -147,34 +155,59 @@ pub fn build_sphere_bvh(
 }
 
 impl SceneGeometry {
+    /// Makes `tri_wide` from `tri_bvh` and `tri_positions`.
+    pub fn collapse_triangle_bvh(&mut self) {
+        self.tri_wide = WideBvh::collapse(&self.tri_bvh, &self.tri_positions);
+    }
+
+    /// Whether queries observed by `V` traverse the wide triangle BVH.
+    fn use_wide<V: GeometryVisitor>(&self) -> bool {
+        !V::OBSERVES && !self.tri_wide.nodes.is_empty()
+    }
+
     /// The closest hit in (0, t_max), triangles and spheres alike.
-    pub fn intersect(
+    pub fn intersect<V: GeometryVisitor>(
         &self,
         ray: &Ray,
         t_max: f32,
-        visitor: &mut impl GeometryVisitor,
+        visitor: &mut V,
     ) -> Option<Hit> {
         let mut best: Option<Hit> = None;
         let mut t_max = t_max;
-        if !self.tri_bvh.nodes.is_empty() {
+        if self.use_wide::<V>() {
+            if let Some((prim, h)) = self.tri_wide.closest_hit(ray, t_max) {
+                t_max = h.t;
+                best = Some(Hit {
+                    t: h.t,
+                    prim,
+                    kind: PrimKind::Triangle,
+                    bary: Vec3::new(h.b0, h.b1, h.b2),
+                });
+            }
+        } else if !self.tri_bvh.nodes.is_empty() {
             visitor.begin_hierarchy(PrimKind::Triangle);
             let shear = RayShear::new(ray);
+            // The winner's hit is kept here instead of re-running its test: a hit is
+            // passed on only when the traversal will keep it (closer, or as close with a
+            // lower index), so the last one passed on is the winner.
+            let mut last: Option<(u32, TriangleHit)> = None;
             let found = self.tri_bvh.closest_hit(ray, t_max, visitor, |p, tm| {
                 let [a, b, c] = self.tri_positions[p as usize];
-                intersect_triangle_sheared(&shear, ray.origin, a, b, c, tm).map(|h| h.t)
+                let h = intersect_triangle_sheared(&shear, ray.origin, a, b, c, tm)?;
+                let keep = last.is_none_or(|(lp, lh)| h.t < lh.t || (h.t == lh.t && p < lp));
+                keep.then(|| {
+                    last = Some((p, h));
+                    h.t
+                })
             });
-            if let Some((prim, _)) = found {
-                // Re-run the winning test for its barycentrics; it is deterministic.
-                let [a, b, c] = self.tri_positions[prim as usize];
-                if let Some(h) = intersect_triangle_sheared(&shear, ray.origin, a, b, c, t_max) {
-                    t_max = h.t;
-                    best = Some(Hit {
-                        t: h.t,
-                        prim,
-                        kind: PrimKind::Triangle,
-                        bary: Vec3::new(h.b0, h.b1, h.b2),
-                    });
-                }
+            if let (Some((prim, _)), Some((_, h))) = (found, last) {
+                t_max = h.t;
+                best = Some(Hit {
+                    t: h.t,
+                    prim,
+                    kind: PrimKind::Triangle,
+                    bary: Vec3::new(h.b0, h.b1, h.b2),
+                });
             }
         }
         if !self.sphere_bvh.nodes.is_empty() {
@@ -196,12 +229,19 @@ impl SceneGeometry {
     }
 
     /// Whether anything lies on the ray in (0, t_max).
-    pub fn occluded(&self, ray: &Ray, t_max: f32, visitor: &mut impl GeometryVisitor) -> bool {
-        let tris = !self.tri_bvh.nodes.is_empty()
-            && self.tri_bvh.any_hit(ray, t_max, visitor, |p| {
-                let [a, b, c] = self.tri_positions[p as usize];
-                intersect_triangle(ray, a, b, c, t_max).is_some()
-            });
+    pub fn occluded<V: GeometryVisitor>(&self, ray: &Ray, t_max: f32, visitor: &mut V) -> bool {
+        let tris = if self.use_wide::<V>() {
+            self.tri_wide.any_hit(ray, t_max, |_, _| true)
+        } else {
+            // The shear is per ray: computed once here, not in every triangle test.
+            !self.tri_bvh.nodes.is_empty() && {
+                let shear = RayShear::new(ray);
+                self.tri_bvh.any_hit(ray, t_max, visitor, |p| {
+                    let [a, b, c] = self.tri_positions[p as usize];
+                    intersect_triangle_sheared(&shear, ray.origin, a, b, c, t_max).is_some()
+                })
+            }
+        };
         tris || (!self.sphere_bvh.nodes.is_empty()
             && self.sphere_bvh.any_hit(ray, t_max, visitor, |p| {
                 let s = &self.spheres[p as usize];
@@ -213,38 +253,39 @@ impl SceneGeometry {
     /// crossed of `(1 - alpha) * (1 - (1 - kd) * alpha)`; zero at the first opaque one.
     /// A ray through the edge shared by two triangles of one surface hits both at the same
     /// t; such twins are counted once.
-    pub fn transmittance(
+    pub fn transmittance<V: GeometryVisitor>(
         &self,
         ray: &Ray,
         t_max: f32,
         materials: &Materials,
-        visitor: &mut impl GeometryVisitor,
+        visitor: &mut V,
     ) -> Vec3 {
         // (t, material, uv) of every transparent surface crossed; opaque ones stop the walk.
         let mut crossings = Crossings::default();
         let opaque = |material: u32| materials.list[material as usize].alpha >= 1.0;
-        if !self.tri_bvh.nodes.is_empty() {
-            let blocked = self.tri_bvh.any_hit(ray, t_max, visitor, |p| {
-                let Some(h) = intersect_triangle(
-                    ray,
-                    self.tri_positions[p as usize][0],
-                    self.tri_positions[p as usize][1],
-                    self.tri_positions[p as usize][2],
-                    t_max,
-                ) else {
-                    return false;
-                };
-                let material = self.tri_material[p as usize];
-                if opaque(material) {
-                    return true;
-                }
-                let [ta, tb, tc] = self.tri_texcoords[p as usize];
-                crossings.push((h.t, material, h.b0 * ta + h.b1 * tb + h.b2 * tc));
-                false
-            });
-            if blocked {
-                return Vec3::ZERO;
+        let mut cross = |p: u32, h: &TriangleHit| {
+            let material = self.tri_material[p as usize];
+            if opaque(material) {
+                return true;
             }
+            let [ta, tb, tc] = self.tri_texcoords[p as usize];
+            crossings.push((h.t, material, h.b0 * ta + h.b1 * tb + h.b2 * tc));
+            false
+        };
+        let blocked = if self.use_wide::<V>() {
+            self.tri_wide.any_hit(ray, t_max, cross)
+        } else {
+            !self.tri_bvh.nodes.is_empty() && {
+                let shear = RayShear::new(ray);
+                self.tri_bvh.any_hit(ray, t_max, visitor, |p| {
+                    let [a, b, c] = self.tri_positions[p as usize];
+                    intersect_triangle_sheared(&shear, ray.origin, a, b, c, t_max)
+                        .is_some_and(|h| cross(p, &h))
+                })
+            }
+        };
+        if blocked {
+            return Vec3::ZERO;
         }
         if !self.sphere_bvh.nodes.is_empty() {
             let blocked = self.sphere_bvh.any_hit(ray, t_max, visitor, |p| {

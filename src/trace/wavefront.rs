@@ -197,7 +197,9 @@ pub fn generate_camera_samples(
     let width = camera.width;
     let basis = CameraBasis::new(camera);
     let offsets = CameraSampleOffsets::new(&settings, &plan);
-    let rays: Vec<QueuedRay> = (0..region.pixels)
+    let wf = &mut *wf;
+    // Into the buffers of the last pass: their allocations are reused, not made anew.
+    (0..region.pixels)
         .into_par_iter()
         .with_min_len(CHUNK)
         .map(|slot| {
@@ -211,29 +213,31 @@ pub fn generate_camera_samples(
                 path: 0,
             }
         })
-        .collect();
-    stats.record(Stage::GenerateCameraSamples, rays.len() as u64);
-    stats.rays.camera += rays.len() as u64;
+        .collect_into_vec(&mut wf.rays);
+    let n = wf.rays.len();
+    stats.record(Stage::GenerateCameraSamples, n as u64);
+    stats.rays.camera += n as u64;
     wf.depth = 0;
+    wf.next.clear();
     radiance.first_pixel = region.first_pixel;
-    radiance.values = vec![Vec3::ZERO; rays.len()];
-    wf.rays = rays;
+    radiance.values.clear();
+    radiance.values.resize(n, Vec3::ZERO);
 }
 
-/// Each ray's closest hit and shading point, in queue order, with what `O` observed of
-/// each query (nothing for `()`).
+/// Each ray's closest hit and shading point into `surfaces`, in queue order; returns what
+/// `O` observed of each query (nothing for `()`).
 fn closest_hits<O: HitObserver>(
     geometry: &SceneGeometry,
     rays: &[QueuedRay],
     interpolate: bool,
-) -> (Vec<Option<Surface>>, Vec<O>) {
+    surfaces: &mut Vec<Option<Surface>>,
+) -> Vec<O> {
     // One observer slot per ray, filled in place: for `()` the slots take no memory and
     // the loop is the plain query.
     let mut observers: Vec<O> = std::iter::repeat_with(O::default)
         .take(rays.len())
         .collect();
-    let surfaces = rays
-        .par_iter()
+    rays.par_iter()
         .zip(observers.par_iter_mut())
         .with_min_len(CHUNK)
         .map(|(q, observer)| {
@@ -241,8 +245,8 @@ fn closest_hits<O: HitObserver>(
             observer.closest(hit.as_ref());
             hit.map(|h| surface_at(geometry, &q.ray, &h, interpolate))
         })
-        .collect();
-    (surfaces, observers)
+        .collect_into_vec(surfaces);
+    observers
 }
 
 /// Finds each ray's closest hit and builds its shading point; with a [`TraceLog`], also
@@ -255,14 +259,16 @@ pub fn intersect_rays(
     log: Option<ResMut<TraceLog>>,
 ) {
     let interpolate = settings.normal_interpolation;
-    wf.hits = match log {
-        None => closest_hits::<()>(&geometry, &wf.rays, interpolate).0,
-        Some(mut log) => {
-            let (hits, rays) = closest_hits::<RayTrace>(&geometry, &wf.rays, interpolate);
-            log.rays = rays;
-            hits
+    let wf = &mut *wf;
+    // Into the last depth's buffer: its allocation is reused.
+    match log {
+        None => {
+            closest_hits::<()>(&geometry, &wf.rays, interpolate, &mut wf.hits);
         }
-    };
+        Some(mut log) => {
+            log.rays = closest_hits::<RayTrace>(&geometry, &wf.rays, interpolate, &mut wf.hits);
+        }
+    }
     stats.record(Stage::IntersectRays, wf.rays.len() as u64);
 }
 
@@ -346,45 +352,44 @@ fn shade_ray(
     direct
 }
 
-/// Shades rays and hits chunk by chunk, in parallel; returns each ray's radiance, the
-/// shadow rays and what `O` observed, all in queue order. Chunks, not rays, own the
-/// shadow-ray vectors: no allocation per ray, and joining them in chunk order keeps the
-/// queue deterministic.
+/// Shades rays and hits chunk by chunk, in parallel, into `radiance` (each ray's) and
+/// `shadow_rays`, both in queue order; returns what `O` observed. Both buffers are the
+/// last depth's, refilled so that their allocations are reused. Chunks, not rays, own
+/// the shadow-ray vectors: no allocation per ray, and joining them in chunk order keeps
+/// the queue deterministic.
 fn shade_chunks<O: LightObserver>(
     cx: &ShadeContext,
     rays: &[QueuedRay],
     hits: &[Option<Surface>],
-) -> (Vec<Vec3>, Vec<ShadowRay>, O) {
-    let chunks: Vec<(Vec<Vec3>, Vec<ShadowRay>, O)> = rays
+    radiance: &mut Vec<Vec3>,
+    shadow_rays: &mut Vec<ShadowRay>,
+) -> O {
+    radiance.clear();
+    radiance.resize(rays.len(), Vec3::ZERO);
+    let chunks: Vec<(Vec<ShadowRay>, O)> = rays
         .par_chunks(CHUNK)
         .zip(hits.par_chunks(CHUNK))
+        .zip(radiance.par_chunks_mut(CHUNK))
         .enumerate()
-        .map(|(c, (rays, hits))| {
+        .map(|(c, ((rays, hits), out))| {
             let mut shadows = Vec::new();
             let mut observer = O::default();
-            let radiance = rays
-                .iter()
-                .zip(hits)
-                .enumerate()
-                .map(|(k, (q, hit))| {
-                    let i = c * CHUNK + k;
-                    shade_ray(cx, i, q, hit, &mut shadows, |ls, c, shadow| {
-                        observer.seen(i as u32, ls, c, shadow)
-                    })
-                })
-                .collect();
-            (radiance, shadows, observer)
+            for (k, ((q, hit), r)) in rays.iter().zip(hits).zip(out).enumerate() {
+                let i = c * CHUNK + k;
+                *r = shade_ray(cx, i, q, hit, &mut shadows, |ls, c, shadow| {
+                    observer.seen(i as u32, ls, c, shadow)
+                });
+            }
+            (shadows, observer)
         })
         .collect();
-    let mut radiance = Vec::with_capacity(rays.len());
-    let mut shadow_rays = Vec::new();
+    shadow_rays.clear();
     let mut observed = O::default();
-    for (r, s, o) in chunks {
+    for (s, o) in chunks {
         observed.join(o, shadow_rays.len() as u32);
-        radiance.extend(r);
         shadow_rays.extend(s);
     }
-    (radiance, shadow_rays, observed)
+    observed
 }
 
 /// Shades every hit: direct light from every light sample, either added at once
@@ -417,23 +422,18 @@ pub fn shade_hits(
         depth: wf.depth,
         queue_shadows: plan.shadow_rays,
     };
-    let (radiance, shadow_rays) = match log {
-        None => {
-            let (radiance, shadow_rays, ()) = shade_chunks(&cx, &wf.rays, &wf.hits);
-            (radiance, shadow_rays)
-        }
+    let wf = &mut *wf;
+    let (radiance, shadows) = (&mut wf.ray_radiance, &mut wf.shadow_rays);
+    match log {
+        None => shade_chunks::<()>(&cx, &wf.rays, &wf.hits, radiance, shadows),
         Some(mut log) => {
-            let (radiance, shadow_rays, seen) = shade_chunks(&cx, &wf.rays, &wf.hits);
-            log.light_samples = seen;
-            (radiance, shadow_rays)
+            log.light_samples = shade_chunks(&cx, &wf.rays, &wf.hits, radiance, shadows);
         }
-    };
+    }
     stats.record(
         Stage::ShadeHits,
         wf.hits.iter().filter(|h| h.is_some()).count() as u64,
     );
-    wf.ray_radiance = radiance;
-    wf.shadow_rays = shadow_rays;
 }
 
 /// Tests every shadow ray and adds the visible part of its contribution: binary
@@ -476,26 +476,25 @@ pub fn gather_radiance(wf: Res<Wavefront>, mut radiance: ResMut<SampleRadiance>)
     }
 }
 
-/// The child rays of every hit for which `make` gives a ray and a weight, in queue
-/// order, as children along `branch` in the ray tree.
+/// Appends to `wf.next` the child rays of every hit for which `make` gives a ray and a
+/// weight, in queue order, as children along `branch` in the ray tree; returns how many.
 fn spawn_children(
-    wf: &Wavefront,
+    wf: &mut Wavefront,
     branch: Branch,
     make: impl Fn(&QueuedRay, &Surface) -> Option<(Ray, Vec3)>,
-) -> Vec<QueuedRay> {
-    wf.rays
-        .iter()
-        .zip(&wf.hits)
-        .filter_map(|(q, hit)| {
-            let (ray, weight) = make(q, hit.as_ref()?)?;
-            Some(QueuedRay {
-                ray,
-                weight,
-                slot: q.slot,
-                path: q.child_path(branch),
-            })
+) -> usize {
+    let before = wf.next.len();
+    let children = wf.rays.iter().zip(&wf.hits).filter_map(|(q, hit)| {
+        let (ray, weight) = make(q, hit.as_ref()?)?;
+        Some(QueuedRay {
+            ray,
+            weight,
+            slot: q.slot,
+            path: q.child_path(branch),
         })
-        .collect()
+    });
+    wf.next.extend(children);
+    wf.next.len() - before
 }
 
 /// Queues `ks`-weighted reflection rays for the next depth.
@@ -509,14 +508,13 @@ pub fn spawn_reflection_rays(
         return;
     }
     let depth = wf.depth;
-    let spawned = spawn_children(&wf, Branch::Reflection, |q, surface| {
+    let spawned = spawn_children(&mut wf, Branch::Reflection, |q, surface| {
         let m = &materials.list[surface.material as usize];
         let weight = q.weight * blend_alpha(&settings, m.alpha, depth) * m.ks;
         (weight != Vec3::ZERO).then(|| (surface.reflection_ray(q.ray.dir), weight))
     });
-    stats.record(Stage::SpawnReflectionRays, spawned.len() as u64);
-    stats.rays.reflection += spawned.len() as u64;
-    wf.next.extend(spawned);
+    stats.record(Stage::SpawnReflectionRays, spawned as u64);
+    stats.rays.reflection += spawned as u64;
 }
 
 /// Queues `(1 - alpha)`-weighted pass-through rays for the next depth.
@@ -529,21 +527,22 @@ pub fn spawn_pass_through_rays(
     if wf.depth >= settings.max_depth {
         return;
     }
-    let spawned = spawn_children(&wf, Branch::PassThrough, |q, surface| {
+    let spawned = spawn_children(&mut wf, Branch::PassThrough, |q, surface| {
         let alpha = materials.list[surface.material as usize].alpha;
         let weight = q.weight * (1.0 - alpha);
         (alpha != 1.0 && weight != Vec3::ZERO)
             .then(|| (surface.pass_through_ray(q.ray.dir), weight))
     });
-    stats.record(Stage::SpawnPassThroughRays, spawned.len() as u64);
-    stats.rays.pass_through += spawned.len() as u64;
-    wf.next.extend(spawned);
+    stats.record(Stage::SpawnPassThroughRays, spawned as u64);
+    stats.rays.pass_through += spawned as u64;
 }
 
 /// Makes the next depth's rays current.
 pub fn advance_depth(mut wf: ResMut<Wavefront>) {
     let wf = &mut *wf;
-    wf.rays = std::mem::take(&mut wf.next);
+    // Swapped, not moved: the spent queue's allocation becomes the next depth's.
+    std::mem::swap(&mut wf.rays, &mut wf.next);
+    wf.next.clear();
     wf.depth += 1;
 }
 

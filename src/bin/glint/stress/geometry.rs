@@ -41,7 +41,7 @@ pub fn geometry_of(
             )
         })
         .collect();
-    SceneGeometry {
+    let mut g = SceneGeometry {
         tri_positions: tris.to_vec(),
         tri_normals: tris.iter().map(|_| [Vec3::Z; 3]).collect(),
         tri_texcoords: tris.iter().map(|_| [Vec2::ZERO; 3]).collect(),
@@ -50,7 +50,11 @@ pub fn geometry_of(
         spheres: spheres.to_vec(),
         sphere_material: vec![0; spheres.len()],
         sphere_bvh: build(&sphere_bounds),
-    }
+        ..Default::default()
+    };
+    // The render's queries traverse the wide BVH: stress it too.
+    g.collapse_triangle_bvh();
+    g
 }
 
 /// A closed cone whose side and base are fans of `n` thin triangles around one vertex.

@@ -1,0 +1,258 @@
+//! Embree 4 as a benchmark peer, loaded at run time from the shared library
+//! named by `GLINT_EMBREE_LIB` (e.g. the `libembree4.so.4` that the `embreex`
+//! Python wheel ships: `pip download --no-deps embreex`, unzip, and point the
+//! variable at `embreex.libs/libembree4-*.so.4`). Nothing is built or linked
+//! at compile time, so the benchmarks build everywhere and skip Embree's rows
+//! when the variable is unset.
+//!
+//! This module is the crate's only `unsafe`: calls through C function
+//! pointers whose signatures and struct layouts are copied from Embree 4's
+//! `rtcore_device.h`, `rtcore_scene.h`, `rtcore_geometry.h`, `rtcore_buffer.h`
+//! and `rtcore_ray.h`.
+
+use std::ffi::{CString, c_char, c_void};
+use std::ptr::null_mut;
+
+use glam::Vec3;
+use glint::accel::Ray;
+use libloading::Library;
+
+/// The environment variable that names the library.
+pub const ENV_VAR: &str = "GLINT_EMBREE_LIB";
+
+const RTC_GEOMETRY_TYPE_TRIANGLE: u32 = 0;
+const RTC_BUFFER_TYPE_INDEX: u32 = 0;
+const RTC_BUFFER_TYPE_VERTEX: u32 = 1;
+const RTC_FORMAT_UINT3: u32 = 0x5003;
+const RTC_FORMAT_FLOAT3: u32 = 0x9003;
+const RTC_INVALID_GEOMETRY_ID: u32 = u32::MAX;
+
+/// `RTCRay`.
+#[repr(C, align(16))]
+#[derive(Clone, Copy)]
+struct RtcRay {
+    org: [f32; 3],
+    tnear: f32,
+    dir: [f32; 3],
+    time: f32,
+    tfar: f32,
+    mask: u32,
+    id: u32,
+    flags: u32,
+}
+
+/// `RTCHit` with one instance level; `inst_prim_id` exists when Embree was
+/// built with instance arrays (4.3+ releases are) and pads it otherwise.
+#[repr(C, align(16))]
+#[derive(Clone, Copy)]
+struct RtcHit {
+    ng: [f32; 3],
+    u: f32,
+    v: f32,
+    prim_id: u32,
+    geom_id: u32,
+    inst_id: [u32; 1],
+    inst_prim_id: [u32; 1],
+}
+
+/// `RTCRayHit`.
+#[repr(C, align(16))]
+#[derive(Clone, Copy)]
+struct RtcRayHit {
+    ray: RtcRay,
+    hit: RtcHit,
+}
+
+type Handle = *mut c_void;
+
+/// The entry points used, resolved once.
+struct Api {
+    new_device: unsafe extern "C" fn(*const c_char) -> Handle,
+    release_device: unsafe extern "C" fn(Handle),
+    get_device_error: unsafe extern "C" fn(Handle) -> u32,
+    new_scene: unsafe extern "C" fn(Handle) -> Handle,
+    release_scene: unsafe extern "C" fn(Handle),
+    commit_scene: unsafe extern "C" fn(Handle),
+    new_geometry: unsafe extern "C" fn(Handle, u32) -> Handle,
+    set_new_geometry_buffer: unsafe extern "C" fn(Handle, u32, u32, u32, usize, usize) -> Handle,
+    commit_geometry: unsafe extern "C" fn(Handle),
+    attach_geometry: unsafe extern "C" fn(Handle, Handle) -> u32,
+    release_geometry: unsafe extern "C" fn(Handle),
+    intersect1: unsafe extern "C" fn(Handle, *mut RtcRayHit, *mut c_void),
+    occluded1: unsafe extern "C" fn(Handle, *mut RtcRay, *mut c_void),
+}
+
+/// A loaded Embree library and one device.
+pub struct Embree {
+    api: Api,
+    device: Handle,
+    // Dropped last: the function pointers above point into it.
+    _lib: Library,
+}
+
+/// A committed Embree scene of one triangle mesh.
+pub struct EmbreeScene<'a> {
+    embree: &'a Embree,
+    scene: Handle,
+}
+
+impl Embree {
+    /// Loads the library named by [`ENV_VAR`] and creates a device with
+    /// Embree's `config` string (e.g. `"threads=1"`); Err says why not.
+    pub fn load(config: &str) -> Result<Embree, String> {
+        let path = std::env::var_os(ENV_VAR).ok_or_else(|| {
+            format!(
+                "{ENV_VAR} is not set (point it at libembree4.so.4, e.g. from the embreex wheel)"
+            )
+        })?;
+        // SAFETY: loading runs the library's initialisers; Embree's are benign.
+        let lib = unsafe { Library::new(&path) }
+            .map_err(|e| format!("{}: {e}", path.to_string_lossy()))?;
+        macro_rules! sym {
+            ($name:literal) => {
+                // SAFETY: the symbol's type is the signature in Embree's headers.
+                *unsafe { lib.get(concat!($name, "\0").as_bytes()) }
+                    .map_err(|e| format!("{}: {e}", path.to_string_lossy()))?
+            };
+        }
+        let api = Api {
+            new_device: sym!("rtcNewDevice"),
+            release_device: sym!("rtcReleaseDevice"),
+            get_device_error: sym!("rtcGetDeviceError"),
+            new_scene: sym!("rtcNewScene"),
+            release_scene: sym!("rtcReleaseScene"),
+            commit_scene: sym!("rtcCommitScene"),
+            new_geometry: sym!("rtcNewGeometry"),
+            set_new_geometry_buffer: sym!("rtcSetNewGeometryBuffer"),
+            commit_geometry: sym!("rtcCommitGeometry"),
+            attach_geometry: sym!("rtcAttachGeometry"),
+            release_geometry: sym!("rtcReleaseGeometry"),
+            intersect1: sym!("rtcIntersect1"),
+            occluded1: sym!("rtcOccluded1"),
+        };
+        let config = CString::new(config).map_err(|e| e.to_string())?;
+        // SAFETY: a NUL-terminated config string; the device is released in Drop.
+        let device = unsafe { (api.new_device)(config.as_ptr()) };
+        if device.is_null() {
+            return Err("rtcNewDevice failed".into());
+        }
+        Ok(Embree {
+            api,
+            device,
+            _lib: lib,
+        })
+    }
+
+    /// Builds a scene (Embree's default, medium quality) over `tris`.
+    pub fn scene(&self, tris: &[[Vec3; 3]]) -> Result<EmbreeScene<'_>, String> {
+        let a = &self.api;
+        let n = tris.len();
+        // SAFETY: Embree allocates both buffers with the sizes given here
+        // (plus its own padding), and they are written within those sizes.
+        unsafe {
+            let scene = (a.new_scene)(self.device);
+            let geom = (a.new_geometry)(self.device, RTC_GEOMETRY_TYPE_TRIANGLE);
+            let verts = (a.set_new_geometry_buffer)(
+                geom,
+                RTC_BUFFER_TYPE_VERTEX,
+                0,
+                RTC_FORMAT_FLOAT3,
+                12,
+                3 * n,
+            ) as *mut f32;
+            let index = (a.set_new_geometry_buffer)(
+                geom,
+                RTC_BUFFER_TYPE_INDEX,
+                0,
+                RTC_FORMAT_UINT3,
+                12,
+                n,
+            ) as *mut u32;
+            if scene.is_null() || geom.is_null() || verts.is_null() || index.is_null() {
+                return Err(format!(
+                    "Embree scene setup failed (error {})",
+                    (a.get_device_error)(self.device)
+                ));
+            }
+            let verts = std::slice::from_raw_parts_mut(verts, 9 * n);
+            let index = std::slice::from_raw_parts_mut(index, 3 * n);
+            for (i, t) in tris.iter().enumerate() {
+                for (k, p) in t.iter().enumerate() {
+                    verts[9 * i + 3 * k..9 * i + 3 * k + 3].copy_from_slice(&p.to_array());
+                    index[3 * i + k] = (3 * i + k) as u32;
+                }
+            }
+            (a.commit_geometry)(geom);
+            (a.attach_geometry)(scene, geom);
+            (a.release_geometry)(geom);
+            (a.commit_scene)(scene);
+            let err = (a.get_device_error)(self.device);
+            if err != 0 {
+                (a.release_scene)(scene);
+                return Err(format!("Embree scene commit failed (error {err})"));
+            }
+            Ok(EmbreeScene {
+                embree: self,
+                scene,
+            })
+        }
+    }
+}
+
+impl Drop for Embree {
+    fn drop(&mut self) {
+        // SAFETY: the device was created by rtcNewDevice and every scene borrowed it.
+        unsafe { (self.api.release_device)(self.device) }
+    }
+}
+
+impl Drop for EmbreeScene<'_> {
+    fn drop(&mut self) {
+        // SAFETY: the scene was created by rtcNewScene.
+        unsafe { (self.embree.api.release_scene)(self.scene) }
+    }
+}
+
+fn rtc_ray(ray: &Ray, t_max: f32) -> RtcRay {
+    RtcRay {
+        org: ray.origin.to_array(),
+        tnear: 0.0,
+        dir: ray.dir.to_array(),
+        time: 0.0,
+        tfar: t_max,
+        mask: u32::MAX,
+        id: 0,
+        flags: 0,
+    }
+}
+
+impl EmbreeScene<'_> {
+    /// Closest hit (triangle index, t) with `rtcIntersect1`.
+    #[inline]
+    pub fn closest(&self, ray: &Ray) -> Option<(u32, f32)> {
+        let mut rh = RtcRayHit {
+            ray: rtc_ray(ray, f32::INFINITY),
+            hit: RtcHit {
+                ng: [0.0; 3],
+                u: 0.0,
+                v: 0.0,
+                prim_id: 0,
+                geom_id: RTC_INVALID_GEOMETRY_ID,
+                inst_id: [RTC_INVALID_GEOMETRY_ID],
+                inst_prim_id: [RTC_INVALID_GEOMETRY_ID],
+            },
+        };
+        // SAFETY: a committed scene and an aligned RTCRayHit; NULL arguments mean defaults.
+        unsafe { (self.embree.api.intersect1)(self.scene, &mut rh, null_mut()) };
+        (rh.hit.geom_id != RTC_INVALID_GEOMETRY_ID).then_some((rh.hit.prim_id, rh.ray.tfar))
+    }
+
+    /// Any hit with t in (0, `t_max`) with `rtcOccluded1`.
+    #[inline]
+    pub fn occluded(&self, ray: &Ray, t_max: f32) -> bool {
+        let mut r = rtc_ray(ray, t_max);
+        // SAFETY: a committed scene and an aligned RTCRay; NULL arguments mean defaults.
+        unsafe { (self.embree.api.occluded1)(self.scene, &mut r, null_mut()) };
+        r.tfar == f32::NEG_INFINITY
+    }
+}

@@ -1,0 +1,444 @@
+//! A 4-wide BVH over triangles for the render's hot path: the binned-SAH binary
+//! tree of [`super::build`] collapsed into nodes of up to four children whose
+//! boxes are stored structure-of-arrays, so that one slab test covers all four
+//! (plain `[f32; 4]` lanes that the compiler vectorises; no `unsafe`), and the
+//! triangles copied in leaf order, so a leaf reads consecutive memory instead of
+//! going through the primitive indices.
+//!
+//! The slab test is the binary tree's (Ize 2013: near and far planes chosen by
+//! the sign of the inverse direction, NaN bounds ignored, exit distance enlarged
+//! by `1 + 2 gamma(3)`), so a box is culled only when the exact ray misses it,
+//! and the triangle test is the same watertight test with the per-ray shear: the
+//! closest hit is the binary tree's, up to which of two triangles at exactly the
+//! same t is met first.
+
+use glam::Vec3;
+
+use super::bvh::{Bvh, MAX_DEPTH};
+use super::triangle::{RayShear, TriangleHit, intersect_triangle_sheared};
+use super::{Aabb, Ray, gamma};
+
+/// Children per node.
+pub const WIDTH: usize = 4;
+
+/// `child` of an unused slot.
+const EMPTY: u32 = u32::MAX;
+
+/// A node of up to four children; box planes are SoA: `bounds[axis][lane]` for the
+/// minimum corner (axis 0..3) and `bounds[3 + axis][lane]` for the maximum.
+#[derive(Clone, Copy, Debug, PartialEq)]
+#[repr(C, align(64))]
+pub struct WideNode {
+    /// Child boxes: min x, y, z then max x, y, z, one lane per child.
+    pub bounds: [[f32; WIDTH]; 6],
+    /// Interior child: its node index. Leaf child: its first slot in `tris`. Unused: `u32::MAX`.
+    pub child: [u32; WIDTH],
+    /// Triangles of a leaf child; 0 for an interior or unused child.
+    pub count: [u32; WIDTH],
+}
+
+impl WideNode {
+    const UNUSED: WideNode = WideNode {
+        bounds: [
+            [f32::INFINITY; WIDTH],
+            [f32::INFINITY; WIDTH],
+            [f32::INFINITY; WIDTH],
+            [f32::NEG_INFINITY; WIDTH],
+            [f32::NEG_INFINITY; WIDTH],
+            [f32::NEG_INFINITY; WIDTH],
+        ],
+        child: [EMPTY; WIDTH],
+        count: [0; WIDTH],
+    };
+
+    /// The box of child `lane`.
+    pub fn child_bounds(&self, lane: usize) -> Aabb {
+        let b = &self.bounds;
+        Aabb {
+            min: Vec3::new(b[0][lane], b[1][lane], b[2][lane]),
+            max: Vec3::new(b[3][lane], b[4][lane], b[5][lane]),
+        }
+    }
+
+    fn set_child_bounds(&mut self, lane: usize, a: Aabb) {
+        for axis in 0..3 {
+            self.bounds[axis][lane] = a.min[axis];
+            self.bounds[3 + axis][lane] = a.max[axis];
+        }
+    }
+}
+
+/// A 4-wide BVH with its triangles in leaf order; root at node 0.
+#[derive(Clone, Debug, Default)]
+pub struct WideBvh {
+    /// Nodes, each after its parent; empty for no triangles.
+    pub nodes: Vec<WideNode>,
+    /// Triangle vertices in leaf order.
+    pub tris: Vec<[Vec3; 3]>,
+    /// The caller's index of each triangle in `tris`.
+    pub prims: Vec<u32>,
+    /// Bounds of everything.
+    pub bounds: Aabb,
+    /// Levels of nodes below the root's (at most the binary tree's depth).
+    pub depth: u32,
+}
+
+/// Traversal stack entries on the call stack: enough for a tree of depth 21, as
+/// each level pushes at most three children. It is filled once per ray, so it is
+/// kept small; deeper trees take a heap stack (3 × `MAX_DEPTH` + 1 at most).
+const STACK_SIZE: usize = 64;
+
+/// Stack entries a tree of `depth` levels below the root needs.
+fn stack_size(depth: u32) -> usize {
+    (WIDTH - 1) * depth as usize + 1
+}
+
+/// The per-ray constants of the wide slab test.
+struct RayBoxes {
+    origin: [f32; 3],
+    inv_dir: [f32; 3],
+    /// Row of `WideNode::bounds` holding each axis's near plane, then the far plane's.
+    near: [usize; 3],
+    far: [usize; 3],
+}
+
+impl RayBoxes {
+    fn new(ray: &Ray) -> RayBoxes {
+        let inv = ray.dir.recip();
+        let neg = |a: usize| inv[a].is_sign_negative() as usize;
+        RayBoxes {
+            origin: ray.origin.to_array(),
+            inv_dir: inv.to_array(),
+            near: [3 * neg(0), 1 + 3 * neg(1), 2 + 3 * neg(2)],
+            far: [3 - 3 * neg(0), 4 - 3 * neg(1), 5 - 3 * neg(2)],
+        }
+    }
+
+    /// Entry distance of each child box the ray meets in [0, t_max], else +inf.
+    /// The same arithmetic as [`Aabb::intersect_ray`], lane by lane, in a loop
+    /// without branches so that it compiles to SIMD.
+    #[inline(always)]
+    fn test(&self, node: &WideNode, t_max: f32) -> [f32; WIDTH] {
+        let b = &node.bounds;
+        let (o, inv) = (self.origin, self.inv_dir);
+        let scale = 1.0 + 2.0 * gamma(3);
+        let mut out = [f32::INFINITY; WIDTH];
+        for (lane, out) in out.iter_mut().enumerate() {
+            let near_x = (b[self.near[0]][lane] - o[0]) * inv[0];
+            let near_y = (b[self.near[1]][lane] - o[1]) * inv[1];
+            let near_z = (b[self.near[2]][lane] - o[2]) * inv[2];
+            let far_x = (b[self.far[0]][lane] - o[0]) * inv[0];
+            let far_y = (b[self.far[1]][lane] - o[1]) * inv[1];
+            let far_z = (b[self.far[2]][lane] - o[2]) * inv[2];
+            let t_near = 0.0f32.max(near_x).max(near_y).max(near_z);
+            let t_far = t_max.min(far_x).min(far_y).min(far_z) * scale;
+            *out = if t_near <= t_far {
+                t_near
+            } else {
+                f32::INFINITY
+            };
+        }
+        out
+    }
+}
+
+impl WideBvh {
+    /// Collapses `bvh` (built over `positions`) into 4-wide nodes, each taking the
+    /// largest-area interior grandchildren in place of their parents; leaves and
+    /// their triangle order are the binary tree's.
+    pub fn collapse(bvh: &Bvh, positions: &[[Vec3; 3]]) -> WideBvh {
+        if bvh.nodes.is_empty() {
+            return WideBvh::default();
+        }
+        let mut nodes = Vec::with_capacity(bvh.nodes.len() / 2 + 1);
+        let depth = collapse_node(bvh, 0, 0, &mut nodes).1;
+        let prims = bvh.prim_indices.clone();
+        let tris = prims.iter().map(|&p| positions[p as usize]).collect();
+        WideBvh {
+            nodes,
+            tris,
+            prims,
+            bounds: bvh.bounds(),
+            depth,
+        }
+    }
+
+    /// Bytes held: nodes, triangles and indices.
+    pub fn bytes(&self) -> usize {
+        size_of_val(self.nodes.as_slice())
+            + size_of_val(self.tris.as_slice())
+            + size_of_val(self.prims.as_slice())
+    }
+
+    /// Visits leaves in near-to-far order of their boxes' entry distances while
+    /// they start before `*t_max`; `leaf(first, count, t_max)` may lower `t_max`
+    /// and returns true to stop. Returns whether a leaf stopped it.
+    #[inline(always)]
+    fn traverse(
+        &self,
+        ray: &Ray,
+        t_max: &mut f32,
+        mut leaf: impl FnMut(usize, usize, &mut f32) -> bool,
+    ) -> bool {
+        if self.nodes.is_empty()
+            || self
+                .bounds
+                .intersect_ray(ray.origin, ray.dir.recip(), *t_max)
+                .is_none()
+        {
+            return false;
+        }
+        let need = stack_size(self.depth);
+        let mut small = [(0, 0.0); STACK_SIZE];
+        let mut large = Vec::new();
+        // One call site, so that the traversal and the leaf test inline into it once.
+        let stack: &mut [(u32, f32)] = if need <= STACK_SIZE {
+            &mut small
+        } else {
+            large.resize(need, (0, 0.0));
+            &mut large
+        };
+        self.traverse_with(stack, ray, t_max, &mut leaf)
+    }
+
+    /// [`Self::traverse`] with the stack given (root at entry 0).
+    #[inline(always)]
+    fn traverse_with(
+        &self,
+        stack: &mut [(u32, f32)],
+        ray: &Ray,
+        t_max: &mut f32,
+        leaf: &mut impl FnMut(usize, usize, &mut f32) -> bool,
+    ) -> bool {
+        let boxes = RayBoxes::new(ray);
+        let mut sp = 1;
+        while sp > 0 {
+            sp -= 1;
+            let (index, t_entry) = stack[sp];
+            // A box pushed earlier may now lie beyond the closest hit found since.
+            if t_entry > *t_max {
+                continue;
+            }
+            let node = &self.nodes[index as usize];
+            let t = boxes.test(node, *t_max);
+            // Children met, nearest last so that it is popped first.
+            let mut order = [0usize; WIDTH];
+            let mut n = 0;
+            for lane in 0..WIDTH {
+                if t[lane] == f32::INFINITY {
+                    continue;
+                }
+                let mut k = n;
+                while k > 0 && t[order[k - 1]] < t[lane] {
+                    order[k] = order[k - 1];
+                    k -= 1;
+                }
+                order[k] = lane;
+                n += 1;
+            }
+            for &lane in &order[..n] {
+                let (child, count) = (node.child[lane], node.count[lane]);
+                if count == 0 {
+                    stack[sp] = (child, t[lane]);
+                    sp += 1;
+                }
+            }
+            // Leaves nearest first, after the interior children are queued.
+            for &lane in order[..n].iter().rev() {
+                let (child, count) = (node.child[lane], node.count[lane]);
+                if count > 0 && t[lane] <= *t_max && leaf(child as usize, count as usize, t_max) {
+                    return true;
+                }
+            }
+        }
+        false
+    }
+
+    /// The closest hit in (0, t_max): the caller's triangle index and the hit. Of
+    /// triangles hit at exactly the same t (where two meet), the lowest index wins,
+    /// whatever order the traversal meets them in.
+    pub fn closest_hit(&self, ray: &Ray, t_max: f32) -> Option<(u32, TriangleHit)> {
+        let shear = RayShear::new(ray);
+        let mut best: Option<(u32, TriangleHit)> = None;
+        let mut t_max = t_max;
+        self.traverse(ray, &mut t_max, |first, count, t_max| {
+            for k in first..first + count {
+                let [a, b, c] = self.tris[k];
+                // Up to and including the best t so far, for the tie-break.
+                let bound = if best.is_some() {
+                    t_max.next_up()
+                } else {
+                    *t_max
+                };
+                let Some(h) = intersect_triangle_sheared(&shear, ray.origin, a, b, c, bound) else {
+                    continue;
+                };
+                let p = self.prims[k];
+                if best.is_none_or(|(bp, bh)| h.t < bh.t || p < bp) {
+                    *t_max = h.t;
+                    best = Some((p, h));
+                }
+            }
+            false
+        });
+        best
+    }
+
+    /// Visits triangles the ray meets in (0, t_max), in no particular order, until
+    /// `visit(prim, hit)` returns true (stop); returns whether it stopped.
+    pub fn any_hit(
+        &self,
+        ray: &Ray,
+        t_max: f32,
+        mut visit: impl FnMut(u32, &TriangleHit) -> bool,
+    ) -> bool {
+        let shear = RayShear::new(ray);
+        let mut t = t_max;
+        self.traverse(ray, &mut t, |first, count, _| {
+            (first..first + count).any(|k| {
+                let [a, b, c] = self.tris[k];
+                intersect_triangle_sheared(&shear, ray.origin, a, b, c, t_max)
+                    .is_some_and(|h| visit(self.prims[k], &h))
+            })
+        })
+    }
+
+    /// Checks every structural invariant against the triangles it was built from;
+    /// Err names the first violation. Invariants: `prims` is a permutation of
+    /// `0..positions.len()` and `tris[k] == positions[prims[k]]`; every node is
+    /// reached once from the root and after its parent; leaves are non-empty and
+    /// cover `tris` without gaps or overlap; a child box contains its node's
+    /// children's boxes, a leaf box its triangles; `bounds` contains the root's
+    /// children; unused slots have no box; no node lies deeper than `depth`.
+    pub fn validate(&self, positions: &[[Vec3; 3]]) -> Result<(), String> {
+        let n = positions.len();
+        if self.prims.len() != n || self.tris.len() != n {
+            return Err(format!(
+                "{} prims and {} tris for {n} triangles",
+                self.prims.len(),
+                self.tris.len()
+            ));
+        }
+        if self.nodes.is_empty() {
+            return if n == 0 {
+                Ok(())
+            } else {
+                Err(format!("no nodes for {n} triangles"))
+            };
+        }
+        let mut seen = vec![false; n];
+        for (k, &p) in self.prims.iter().enumerate() {
+            let Some(s) = seen.get_mut(p as usize).filter(|s| !**s) else {
+                return Err(format!("prims[{k}] = {p} is out of range or repeated"));
+            };
+            *s = true;
+            if self.tris[k] != positions[p as usize] {
+                return Err(format!("tris[{k}] is not triangle {p}"));
+            }
+        }
+        let mut reached = vec![false; self.nodes.len()];
+        let mut covered = vec![false; n];
+        if self.depth > MAX_DEPTH {
+            return Err(format!("depth {} exceeds {MAX_DEPTH}", self.depth));
+        }
+        let mut stack = vec![(0usize, self.bounds, 0u32)];
+        reached[0] = true;
+        while let Some((i, outer, depth)) = stack.pop() {
+            if depth > self.depth {
+                return Err(format!(
+                    "node {i} at depth {depth}, below the recorded {}",
+                    self.depth
+                ));
+            }
+            let node = &self.nodes[i];
+            for lane in 0..WIDTH {
+                let (child, count) = (node.child[lane], node.count[lane]);
+                let b = node.child_bounds(lane);
+                if child == EMPTY {
+                    if !b.is_empty() || count != 0 {
+                        return Err(format!("node {i} lane {lane}: unused slot with a box"));
+                    }
+                    continue;
+                }
+                if !outer.contains_box(&b) {
+                    return Err(format!("node {i} lane {lane}: box outside its parent's"));
+                }
+                if count == 0 {
+                    let c = child as usize;
+                    if c <= i || c >= self.nodes.len() || reached[c] {
+                        return Err(format!("node {i} lane {lane}: bad child {child}"));
+                    }
+                    reached[c] = true;
+                    stack.push((c, b, depth + 1));
+                    continue;
+                }
+                let (first, count) = (child as usize, count as usize);
+                if first + count > n {
+                    return Err(format!("node {i} lane {lane}: leaf past the end"));
+                }
+                let slots = first..first + count;
+                for (k, tri) in slots.clone().zip(&self.tris[slots]) {
+                    if std::mem::replace(&mut covered[k], true) {
+                        return Err(format!("triangle slot {k} in two leaves"));
+                    }
+                    if !b.contains_box(&Aabb::from_points(tri)) {
+                        return Err(format!("node {i} lane {lane}: slot {k} outside the box"));
+                    }
+                }
+            }
+        }
+        if let Some(i) = reached.iter().position(|r| !r) {
+            return Err(format!("node {i} is unreachable"));
+        }
+        if let Some(k) = covered.iter().position(|c| !c) {
+            return Err(format!("triangle slot {k} is in no leaf"));
+        }
+        Ok(())
+    }
+}
+
+/// Appends the wide node for binary node `b` (and its subtree) at `depth`; returns its
+/// index and the deepest level in its subtree.
+fn collapse_node(bvh: &Bvh, b: usize, depth: u32, out: &mut Vec<WideNode>) -> (u32, u32) {
+    let me = out.len();
+    out.push(WideNode::UNUSED);
+    let first = &bvh.nodes[b];
+    let mut kids: Vec<usize> = if first.is_leaf() {
+        vec![b]
+    } else {
+        vec![b + 1, first.offset as usize]
+    };
+    // Open the interior child of largest area until four children are reached.
+    while kids.len() < WIDTH {
+        let Some(k) = (0..kids.len())
+            .filter(|&k| !bvh.nodes[kids[k]].is_leaf())
+            .max_by(|&x, &y| {
+                let area = |k: usize| bvh.nodes[kids[k]].bounds().surface_area();
+                area(x).total_cmp(&area(y))
+            })
+        else {
+            break;
+        };
+        let open = kids[k];
+        kids[k] = open + 1;
+        kids.insert(k + 1, bvh.nodes[open].offset as usize);
+    }
+    let mut deepest = depth;
+    for (lane, &k) in kids.iter().enumerate() {
+        let node = bvh.nodes[k];
+        out[me].set_child_bounds(lane, node.bounds());
+        if node.is_leaf() {
+            out[me].child[lane] = node.offset;
+            out[me].count[lane] = node.count;
+        } else {
+            let (child, d) = collapse_node(bvh, k, depth + 1, out);
+            out[me].child[lane] = child;
+            deepest = deepest.max(d);
+        }
+    }
+    (me as u32, deepest)
+}
+
+#[cfg(test)]
+#[path = "wide_tests.rs"]
+mod tests;

@@ -1,0 +1,245 @@
+//! Tests of the 4-wide BVH against the binary tree and brute force.
+
+use super::*;
+use crate::accel::SplitMethod;
+use crate::test_util::Lcg;
+use glam::vec3;
+
+type Tri = [Vec3; 3];
+
+fn random_tris(n: usize, seed: u64) -> Vec<Tri> {
+    let mut rng = Lcg(seed);
+    (0..n)
+        .map(|_| {
+            let c = rng.vec() * 10.0 - Vec3::splat(5.0);
+            [c, c + rng.dir() * 0.5, c + rng.dir() * 0.5]
+        })
+        .collect()
+}
+
+/// A grid of quads in the plane y = 0: rays through shared edges and vertices.
+fn grid(n: usize) -> Vec<Tri> {
+    let mut tris = Vec::new();
+    for i in 0..n {
+        for j in 0..n {
+            let p = |a: usize, b: usize| vec3(a as f32, 0.0, b as f32);
+            tris.push([p(i, j), p(i + 1, j), p(i + 1, j + 1)]);
+            tris.push([p(i, j), p(i + 1, j + 1), p(i, j + 1)]);
+        }
+    }
+    tris
+}
+
+fn both(tris: &[Tri], split: SplitMethod) -> (Bvh, WideBvh) {
+    let bounds: Vec<Aabb> = tris.iter().map(|t| Aabb::from_points(t)).collect();
+    let bvh = Bvh::build(&bounds, split);
+    let wide = WideBvh::collapse(&bvh, tris);
+    (bvh, wide)
+}
+
+fn rays(n: usize, seed: u64) -> Vec<(Ray, f32)> {
+    let mut rng = Lcg(seed);
+    (0..n)
+        .map(|i| {
+            let o = rng.vec() * 14.0 - Vec3::splat(7.0);
+            let mut d = rng.dir();
+            // Axis-aligned directions have zero components (inf inverse).
+            if i % 10 == 0 {
+                d = Vec3::ZERO;
+                d[i / 10 % 3] = if i % 20 == 0 { 1.0 } else { -1.0 };
+            }
+            let t_max = if i % 3 == 0 { 4.0 } else { f32::INFINITY };
+            (Ray::new(o, d * (0.5 + rng.next_f32())), t_max)
+        })
+        .collect()
+}
+
+fn binary_closest(bvh: &Bvh, tris: &[Tri], ray: &Ray, t_max: f32) -> Option<(u32, f32)> {
+    let s = RayShear::new(ray);
+    bvh.closest_hit(ray, t_max, &mut (), |p, t| {
+        let [a, b, c] = tris[p as usize];
+        intersect_triangle_sheared(&s, ray.origin, a, b, c, t).map(|h| h.t)
+    })
+}
+
+#[test]
+fn empty_wide_bvh_never_hits_and_validates() {
+    let w = WideBvh::collapse(&Bvh::default(), &[]);
+    assert!(w.validate(&[]).is_ok());
+    let r = Ray::new(Vec3::ZERO, Vec3::X);
+    assert!(w.closest_hit(&r, f32::INFINITY).is_none());
+    assert!(!w.any_hit(&r, f32::INFINITY, |_, _| true));
+}
+
+#[test]
+fn collapsed_trees_validate_and_are_wide() {
+    for (tris, split) in [
+        (random_tris(3, 1), SplitMethod::SahBinned),
+        (random_tris(2000, 2), SplitMethod::SahBinned),
+        (random_tris(2000, 3), SplitMethod::Median),
+        (grid(20), SplitMethod::SahBinned),
+    ] {
+        let (bvh, wide) = both(&tris, split);
+        wide.validate(&tris).unwrap();
+        if tris.len() > 100 {
+            // Each wide node replaces up to three binary interior nodes (fewer where
+            // leaves take its slots).
+            let interior = bvh.nodes.len() - bvh.leaf_count();
+            let wide_nodes = wide.nodes.len();
+            assert!(3 * wide_nodes < 2 * interior, "{wide_nodes} for {interior}");
+        }
+    }
+}
+
+#[test]
+fn validate_catches_a_shrunken_box_and_a_wrong_triangle() {
+    let tris = random_tris(500, 4);
+    let (_, wide) = both(&tris, SplitMethod::SahBinned);
+    let mut bad = wide.clone();
+    let lane = (0..WIDTH)
+        .find(|&l| bad.nodes[0].child[l] != EMPTY)
+        .unwrap();
+    bad.nodes[0].bounds[3][lane] = bad.nodes[0].bounds[0][lane];
+    assert!(bad.validate(&tris).is_err());
+    let mut bad = wide.clone();
+    bad.tris.swap(0, 1);
+    assert!(bad.validate(&tris).is_err());
+}
+
+#[test]
+fn closest_and_any_hit_match_the_binary_tree() {
+    for (tris, seed) in [(random_tris(3000, 5), 6), (grid(16), 7)] {
+        let (bvh, wide) = both(&tris, SplitMethod::SahBinned);
+        let mut hits = 0;
+        for (ray, t_max) in rays(4000, seed) {
+            let expect = binary_closest(&bvh, &tris, &ray, t_max);
+            let got = wide.closest_hit(&ray, t_max).map(|(p, h)| (p, h.t));
+            assert_eq!(got, expect, "{ray:?}");
+            hits += got.is_some() as u32;
+            assert_eq!(
+                wide.any_hit(&ray, t_max, |_, _| true),
+                expect.is_some(),
+                "{ray:?}"
+            );
+        }
+        assert!(hits > 100, "only {hits} hits");
+    }
+}
+
+#[test]
+fn rays_along_the_grid_edges_never_slip_through() {
+    // Straight down through every vertex and edge midpoint of the grid.
+    let tris = grid(8);
+    let (_, wide) = both(&tris, SplitMethod::SahBinned);
+    for i in 0..=16 {
+        for j in 0..=16 {
+            let o = vec3(i as f32 * 0.5, 1.0, j as f32 * 0.5);
+            let inside = (0.0..=8.0).contains(&o.x) && (0.0..=8.0).contains(&o.z);
+            let hit = wide.closest_hit(&Ray::new(o, -Vec3::Y), f32::INFINITY);
+            assert_eq!(hit.is_some(), inside, "{o}");
+            if let Some((_, h)) = hit {
+                assert_eq!(h.t, 1.0);
+            }
+        }
+    }
+}
+
+#[test]
+fn deep_trees_take_a_heap_stack_and_still_match() {
+    // A binary chain (leaf k beside the subtree of leaves k+1..), as a builder could
+    // make at its depth limit: the wide tree takes three of its levels per level,
+    // which is still deeper than the stack on the call stack holds.
+    let n = 72;
+    let tris: Vec<Tri> = (0..n)
+        .map(|k| {
+            let x = k as f32;
+            [vec3(x, -1.0, -1.0), vec3(x, 1.0, -1.0), vec3(x, 0.0, 1.0)]
+        })
+        .collect();
+    let boxes: Vec<Aabb> = tris.iter().map(|t| Aabb::from_points(t)).collect();
+    let rest = |k: usize| boxes[k..].iter().fold(Aabb::EMPTY, |a, b| a.union(*b));
+    let mut nodes = Vec::new();
+    for (k, &b) in boxes[..n - 1].iter().enumerate() {
+        let i = nodes.len() as u32;
+        nodes.push(crate::accel::BvhNode::interior(rest(k), i + 2));
+        nodes.push(crate::accel::BvhNode::leaf(b, k as u32, 1));
+    }
+    nodes.push(crate::accel::BvhNode::leaf(boxes[n - 1], n as u32 - 1, 1));
+    let bvh = Bvh {
+        nodes,
+        prim_indices: (0..n as u32).collect(),
+    };
+    let wide = WideBvh::collapse(&bvh, &tris);
+    wide.validate(&tris).unwrap();
+    assert!(stack_size(wide.depth) > STACK_SIZE, "depth {}", wide.depth);
+    let brute = |ray: &Ray, t_max: f32| {
+        let s = RayShear::new(ray);
+        let mut best: Option<(u32, f32)> = None;
+        for (p, &[a, b, c]) in tris.iter().enumerate() {
+            let bound = best.map_or(t_max, |b| b.1);
+            if let Some(h) = intersect_triangle_sheared(&s, ray.origin, a, b, c, bound) {
+                best = Some((p as u32, h.t));
+            }
+        }
+        best
+    };
+    let mut hits = 0;
+    for (ray, t_max) in rays(2000, 9) {
+        let ray = Ray::new(ray.origin + vec3(36.0, 0.0, 0.0), ray.dir);
+        let got = wide.closest_hit(&ray, t_max).map(|(p, h)| (p, h.t));
+        assert_eq!(got, brute(&ray, t_max), "{ray:?}");
+        hits += got.is_some() as u32;
+    }
+    assert!(hits > 30, "only {hits} hits");
+    let mut shallow = wide.clone();
+    shallow.depth = 0;
+    assert!(shallow.validate(&tris).is_err());
+}
+
+#[test]
+fn a_tie_at_a_shared_edge_goes_to_the_lowest_index_in_both_trees() {
+    // Straight down onto the shared diagonal of every quad of the grid.
+    let tris = grid(8);
+    let (bvh, wide) = both(&tris, SplitMethod::SahBinned);
+    for i in 0..8 {
+        for j in 0..8 {
+            let o = vec3(i as f32 + 0.25, 1.0, j as f32 + 0.25);
+            let ray = Ray::new(o, -Vec3::Y);
+            let quad = 2 * (i * 8 + j) as u32;
+            let expect = Some((quad, 1.0));
+            assert_eq!(binary_closest(&bvh, &tris, &ray, f32::INFINITY), expect);
+            let got = wide.closest_hit(&ray, f32::INFINITY).map(|(p, h)| (p, h.t));
+            assert_eq!(got, expect);
+        }
+    }
+}
+
+#[test]
+fn any_hit_visits_every_crossing_until_told_to_stop() {
+    // Ten parallel planes of two triangles each, crossed by one ray.
+    let tris: Vec<Tri> = (0..10)
+        .flat_map(|k| {
+            let z = k as f32;
+            [
+                [vec3(-1., -1., z), vec3(1., -1., z), vec3(1., 1., z)],
+                [vec3(-1., -1., z), vec3(1., 1., z), vec3(-1., 1., z)],
+            ]
+        })
+        .collect();
+    let (_, wide) = both(&tris, SplitMethod::SahBinned);
+    let ray = Ray::new(vec3(0.3, -0.2, -1.0), Vec3::Z);
+    let mut seen = Vec::new();
+    assert!(!wide.any_hit(&ray, 20.0, |p, h| {
+        seen.push((p / 2, h.t));
+        false
+    }));
+    seen.sort_by(|a, b| a.1.total_cmp(&b.1));
+    assert_eq!(seen.len(), 10);
+    assert!(seen.iter().enumerate().all(|(k, s)| s.0 == k as u32));
+    let mut n = 0;
+    assert!(wide.any_hit(&ray, 20.0, |_, _| {
+        n += 1;
+        n == 3
+    }));
+    assert_eq!(n, 3);
+}
