@@ -464,3 +464,13 @@ fn a_scene_without_lights_or_geometry_is_warned_about() {
     );
     assert!(load(GOOD).warnings().is_empty());
 }
+
+/// Without the `view` feature, `glint view` is a known command that says how to get it.
+#[cfg(not(feature = "view"))]
+#[test]
+fn the_cli_says_how_to_get_the_viewer_when_it_is_not_built_in() {
+    let (ok, stderr, _) = run_cli(Some(GOOD), &["view", "scene.ron"]);
+    assert!(!ok);
+    assert_eq!(stderr.lines().count(), 1, "{stderr}");
+    assert!(stderr.contains("--features view"), "{stderr}");
+}

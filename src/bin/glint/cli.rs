@@ -26,6 +26,9 @@ pub enum Command {
     Converge(ConvergeArgs),
     /// Explain one pixel: a debug image of its rays, BVH, lights, texture and samples.
     Debug(DebugCmd),
+    /// Open a window on a scene or model: progressive render, camera, settings, and
+    /// pixel tracing in 3D (needs the `view` feature: `cargo run --release --features view`).
+    View(SceneArgs),
     /// Run the numerical stress suite (extreme scales, edges, grazing rays, degenerate
     /// input...) and print a table of measurements; fails if any case fails.
     Stress(StressArgs),
