@@ -17,6 +17,8 @@ use super::scene::ViewScene;
 use super::traces::{Projector, TracedPixel, draw_traces, trace_pixel};
 use super::worker::{Frame, Job, Report, Wake, Worker};
 
+/// Width of the side panel, in points, when the window opens.
+pub const PANEL_WIDTH: f32 = 320.0;
 /// The camera counts as moving for this long after the last input that moved it.
 const SETTLE: Duration = Duration::from_millis(150);
 /// Flight speed: the distance to the point looked at, per second.
@@ -120,7 +122,7 @@ impl Viewer {
         egui::Panel::bottom("status").show(ui, |ui| self.status_line(ui));
         egui::Panel::left("panel")
             .resizable(true)
-            .default_size(300.0)
+            .default_size(PANEL_WIDTH)
             .show(ui, |ui| {
                 egui::ScrollArea::vertical().show(ui, |ui| self.side_panel(ui));
             });

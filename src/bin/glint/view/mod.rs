@@ -16,11 +16,10 @@ pub mod worker;
 
 use std::path::Path;
 
+use app::PANEL_WIDTH;
 pub use app::Viewer;
 pub use scene::ViewScene;
 
-/// Size of the side panel, in points, added to the image's for the first window size.
-const PANEL_WIDTH: f32 = 320.0;
 /// Height of the status line, in points.
 const STATUS_HEIGHT: f32 = 24.0;
 

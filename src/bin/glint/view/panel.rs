@@ -85,7 +85,7 @@ impl Viewer {
         ui.heading("Save");
         ui.horizontal(|ui| {
             let label = ui.label("image");
-            ui.text_edit_singleline(&mut self.image_path)
+            ui.add(egui::TextEdit::singleline(&mut self.image_path).desired_width(150.0))
                 .labelled_by(label.id);
             if ui.button("save image").clicked() {
                 let path = self.image_path.clone();
@@ -97,7 +97,7 @@ impl Viewer {
         });
         ui.horizontal(|ui| {
             let label = ui.label("scene");
-            ui.text_edit_singleline(&mut self.scene_path)
+            ui.add(egui::TextEdit::singleline(&mut self.scene_path).desired_width(150.0))
                 .labelled_by(label.id);
             if ui.button("save scene").clicked() {
                 let path = self.scene_path.clone();
@@ -146,7 +146,9 @@ fn settings_ui(ui: &mut Ui, s: &mut Settings, gradients: &mut [String; 2]) {
     {
         ui.horizontal(|ui| {
             let label = ui.label(key);
-            let edit = ui.text_edit_singleline(text).labelled_by(label.id);
+            let edit = ui
+                .add(egui::TextEdit::singleline(text).desired_width(150.0))
+                .labelled_by(label.id);
             if edit.lost_focus() {
                 // A value that does not parse or validate leaves the setting as it was.
                 let mut changed = s.clone();

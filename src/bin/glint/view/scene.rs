@@ -46,11 +46,16 @@ impl ViewScene {
         let mut renderer = Renderer::from_file(path, overrides)?;
         renderer.prepare()?;
         let mut camera = renderer.camera().ok_or(glint::GlintError::NoCamera)?;
-        let notes = renderer.summary(0, Default::default()).notes;
+        let mut notes = renderer.summary(0, Default::default()).notes;
+        // Inside an interior, the default light goes inside too, under the roof.
+        let mut inside_light = None;
         if notes.iter().any(|n| n.starts_with("camera: automatic")) {
-            let bounds = renderer.world.resource::<SceneGeometry>().bounds();
-            if let Some(inside) = interior_camera(bounds.min, bounds.max, &camera) {
+            let b = renderer.world.resource::<SceneGeometry>().bounds();
+            if let Some(inside) = interior_camera(b.min, b.max, &camera) {
                 camera = inside;
+                let c = 0.5 * (b.min + b.max);
+                inside_light = Some(Vec3::new(c.x, b.min.y + 0.8 * (b.max.y - b.min.y), c.z));
+                notes.push("viewer: an interior, entered; its default light is inside".into());
             }
         }
         let mut entities = vec![EntityDesc::Mesh(MeshDesc {
@@ -73,7 +78,7 @@ impl ViewScene {
             if name.as_str() == "default light" {
                 entities.push(EntityDesc::PointLight(PointLightDesc {
                     name: Some("default light".into()),
-                    position: light.position,
+                    position: inside_light.unwrap_or(light.position),
                     color: light.color,
                 }));
             }
