@@ -161,6 +161,26 @@ fn a_saved_scene_renders_in_batch_the_image_the_viewer_shows() {
     let film = batch.film();
     assert_eq!((film.width, film.height), (shown.width, shown.height));
     assert!(film.image() == shown.pixels, "the batch render differs");
+
+    // Save image writes what the viewer shows, as `glint render` would.
+    let png = dir.path().join("view.png");
+    h.state_mut().save_image(png.to_str().unwrap()).unwrap();
+    let batch_png = dir.path().join("batch.png");
+    glint::film::write_image(
+        &batch_png,
+        film.width,
+        film.height,
+        &film.image(),
+        glint::film::Encoding::Linear,
+    )
+    .unwrap();
+    assert_eq!(
+        std::fs::read(&png).unwrap(),
+        std::fs::read(&batch_png).unwrap()
+    );
+    let exr = dir.path().join("view.exr");
+    h.state_mut().save_image(exr.to_str().unwrap()).unwrap();
+    assert!(std::fs::metadata(&exr).unwrap().len() > 0);
 }
 
 /// Time to the first frame and frame time while orbiting at 800x600, for the README:

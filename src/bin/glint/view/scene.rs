@@ -337,6 +337,18 @@ mod tests {
     }
 
     #[test]
+    fn only_a_model_much_wider_than_tall_is_entered() {
+        let c = glint::scene::model::framing_camera(Vec3::ZERO, 1.0, 80, 60);
+        assert!(interior_camera(Vec3::splat(-1.0), Vec3::ONE, &c).is_none());
+        let (min, max) = (Vec3::new(-20.0, 0.0, -8.0), Vec3::new(20.0, 10.0, 8.0));
+        let inside = interior_camera(min, max, &c).unwrap();
+        for p in [inside.position, inside.look_at] {
+            assert!(p.cmpgt(min).all() && p.cmplt(max).all(), "{p}");
+        }
+        assert_eq!((inside.width, inside.height), (80, 60));
+    }
+
+    #[test]
     fn patch_replaces_both_and_skips_strings_and_comments() {
         let text = "(camera: (a: \"x),\"), /* settings: 1 */ settings: (b: 2), materials: {})";
         let out = patch_fields(text, "C", "S").unwrap();
