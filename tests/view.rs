@@ -40,7 +40,10 @@ fn on_image(v: &Viewer, fx: f32, fy: f32) -> Pos2 {
 fn r_over_a_pixel_creates_the_primitives_glint_debug_dumps() {
     let mut h = harness(CORNELL);
     let p = on_image(h.state(), 0.5, 0.6);
-    let pixel = h.state().pixel_at(p).unwrap();
+    // One point is one pixel here: the image is as large as its area of the window.
+    let (r, c) = (h.state().image_rect, &h.state().camera);
+    assert_eq!((c.width, c.height), (r.width() as u32, r.height() as u32));
+    let pixel = [(p.x - r.min.x) as u32, (p.y - r.min.y) as u32];
     h.hover_at(p);
     h.key_press(Key::R);
     h.run_steps(3);
