@@ -256,3 +256,25 @@ fn timings_at_800x600() {
         );
     }
 }
+
+#[test]
+fn a_traced_texture_lookup_brings_the_texture_for_its_panel() {
+    let scene =
+        ViewScene::load(Path::new("scenes/cube_textured.ron"), &Overrides::default()).unwrap();
+    let camera = scene.camera();
+    let centre = [camera.width / 2, camera.height / 2];
+    let t = view::traces::trace_pixel(&scene, &camera, &scene.file.settings, centre, None).unwrap();
+    let panel = t
+        .panels
+        .first()
+        .expect("the centre pixel looks up the texture");
+    let [w, h] = panel.image.size;
+    assert!(w > 1 && h > 1 && w <= 256 && h <= 256, "{w}x{h}");
+    assert!(
+        panel
+            .image
+            .pixels
+            .iter()
+            .any(|p| *p != panel.image.pixels[0])
+    );
+}

@@ -237,7 +237,7 @@ impl Viewer {
         draw_traces(
             &painter,
             &Projector::new(&self.camera, rect),
-            &self.traces,
+            &mut self.traces,
             &self.shown,
         );
 

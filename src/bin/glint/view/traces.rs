@@ -6,13 +6,29 @@ use std::collections::BTreeSet;
 use egui::{Align2, Color32, FontId, Painter, Pos2, Rect, Stroke, pos2, vec2};
 use glam::{Vec2, Vec3};
 use glint::debug::{DebugPrimitive, DebugRequest, DebugSession, Feature, Shape};
+use glint::scene::texture::Texture;
 use glint::scene::{Camera, Settings};
 use glint::trace::camera::CameraBasis;
+use glint::trace::materials::Materials;
 
 use super::scene::ViewScene;
 
+/// Texels a side of a texture panel's image at most.
+const PANEL_TEXELS: u32 = 256;
+
+/// A texture the trace looked up, as the image of its panel.
+#[derive(Clone)]
+pub struct PanelImage {
+    /// Index into the material table's textures.
+    pub texture: u32,
+    /// The texture, shrunk to at most [`PANEL_TEXELS`] a side.
+    pub image: egui::ColorImage,
+    /// The image once uploaded.
+    pub handle: Option<egui::TextureHandle>,
+}
+
 /// One traced pixel and what its trace spawned.
-#[derive(Clone, Debug)]
+#[derive(Clone)]
 pub struct TracedPixel {
     /// The pixel `[x, y]` of the view it was traced in.
     pub pixel: [u32; 2],
@@ -22,6 +38,8 @@ pub struct TracedPixel {
     pub primitives: Vec<DebugPrimitive>,
     /// The same text `glint debug --dump` writes.
     pub dump: String,
+    /// The textures of its texture panels.
+    pub panels: Vec<PanelImage>,
 }
 
 /// Traces `pixel` of the view (`camera`, `settings`) exactly as `glint debug --pixel`
@@ -37,12 +55,53 @@ pub fn trace_pixel(
     let mut request = DebugRequest::all(pixel[0], pixel[1]);
     request.bvh_level = bvh_level;
     let mut session = DebugSession::trace(&file, &scene.path, request)?;
+    let primitives = session.primitives();
+    let textures = &session.renderer.world.resource::<Materials>().textures;
+    let panels = primitives
+        .iter()
+        .filter_map(|p| match &p.shape {
+            Shape::TexturePanel { texture, .. } => {
+                let t = textures.get(*texture as usize)?;
+                Some(PanelImage {
+                    texture: *texture,
+                    image: panel_image(t),
+                    handle: None,
+                })
+            }
+            _ => None,
+        })
+        .collect();
     Ok(TracedPixel {
         pixel,
         color: session.pixel_color(),
-        primitives: session.primitives(),
         dump: session.dump_ron()?,
+        primitives,
+        panels,
     })
+}
+
+/// `t` as an image of at most [`PANEL_TEXELS`] a side (nearest texel), row 0 at the top.
+fn panel_image(t: &Texture) -> egui::ColorImage {
+    let scale = (PANEL_TEXELS as f32 / t.width.max(t.height).max(1) as f32).min(1.0);
+    let w = ((t.width as f32 * scale) as u32).max(1);
+    let h = ((t.height as f32 * scale) as u32).max(1);
+    let mut rgb = Vec::with_capacity((w * h * 3) as usize);
+    for j in 0..h {
+        for i in 0..w {
+            let x = ((i as f32 / scale) as u32).min(t.width.saturating_sub(1));
+            let y = ((j as f32 / scale) as u32).min(t.height.saturating_sub(1));
+            let c = t
+                .texels
+                .get((y * t.width + x) as usize)
+                .copied()
+                .unwrap_or_default();
+            rgb.extend(
+                c.to_array()
+                    .map(|v| (v.clamp(0.0, 1.0) * 255.0 + 0.5) as u8),
+            );
+        }
+    }
+    egui::ColorImage::from_rgb([w as usize, h as usize], &rgb)
 }
 
 /// A linear debug colour as egui's.
@@ -114,12 +173,15 @@ impl Projector {
 pub fn draw_traces(
     painter: &Painter,
     proj: &Projector,
-    traces: &[TracedPixel],
+    traces: &mut [TracedPixel],
     shown: &BTreeSet<Feature>,
 ) {
-    for (i, t) in traces.iter().enumerate() {
+    for (i, t) in traces.iter_mut().enumerate() {
+        let TracedPixel {
+            primitives, panels, ..
+        } = t;
         let mut inset = 0;
-        for p in t.primitives.iter().filter(|p| shown.contains(&p.feature)) {
+        for p in primitives.iter().filter(|p| shown.contains(&p.feature)) {
             let c = color(p.color);
             let stroke = Stroke::new(1.5, c);
             match &p.shape {
@@ -147,10 +209,25 @@ pub fn draw_traces(
                 }
                 Shape::Label { at: None, .. } => {}
                 Shape::TexturePanel {
-                    size, uv, texels, ..
+                    texture,
+                    size,
+                    uv,
+                    texels,
                 } => {
                     let r = inset_rect(proj.rect, i, inset);
                     inset += 1;
+                    painter.rect_filled(r, 0.0, Color32::from_black_alpha(200));
+                    if let Some(panel) = panels.iter_mut().find(|p| p.texture == *texture) {
+                        let handle = panel.handle.get_or_insert_with(|| {
+                            painter.ctx().load_texture(
+                                format!("texture panel {i} {texture}"),
+                                panel.image.clone(),
+                                egui::TextureOptions::NEAREST,
+                            )
+                        });
+                        let uv = Rect::from_min_max(pos2(0.0, 0.0), pos2(1.0, 1.0));
+                        painter.image(handle.id(), r, uv, Color32::WHITE);
+                    }
                     draw_texture_panel(painter, r, *size, *uv, texels, c);
                 }
                 Shape::SampleGrid { strata, points } => {
@@ -202,7 +279,6 @@ fn draw_texture_panel(
     texels: &[([u32; 2], f32)],
     c: Color32,
 ) {
-    painter.rect_filled(r, 0.0, Color32::from_black_alpha(200));
     painter.rect_stroke(r, 0.0, Stroke::new(1.0, c), egui::StrokeKind::Inside);
     let (w, h) = (size[0].max(1) as f32, size[1].max(1) as f32);
     for ([x, y], weight) in texels {
