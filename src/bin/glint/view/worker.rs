@@ -205,7 +205,8 @@ fn step(renderer: &mut Renderer, p: &mut Progress) -> glint::Result<Option<Frame
     if coarse || sample == 0 {
         renderer.restart(&camera, &p.job.settings);
         renderer.prepare()?;
-        if p.info.is_empty() {
+        // The plan view describes the full-resolution camera once there is one.
+        if p.info.is_empty() || !coarse {
             p.info = glint::info::describe(renderer)?;
             p.skipped = renderer
                 .plan()
