@@ -20,6 +20,9 @@ use crate::scene::{
 };
 use crate::schedule::{PassControl, add_render_schedules, run_pass, run_passes, run_prepare};
 use crate::stats::RenderStats;
+use crate::trace::geometry::SceneGeometry;
+use crate::trace::lights::Lights;
+use crate::trace::materials::Materials;
 use crate::trace::plan::RenderPlan;
 
 pub use crate::scene::Overrides;
@@ -260,6 +263,30 @@ impl Renderer {
                 memory::product(&[triangles, memory::BYTES_PER_PREPARED_TRIANGLE]),
             ),
         ])?)
+    }
+
+    /// Starts over with `camera` and `settings`, for drivers that render one pass at a
+    /// time while the view changes (`glint view`): the next pass goes into a new film of
+    /// the camera's size. When the settings differ, the tables, the BVHs, the plan and the
+    /// statistics are dropped and the prepare stage runs again before the next pass,
+    /// because each of them depends on the settings.
+    pub fn restart(&mut self, camera: &Camera, settings: &Settings) {
+        let mut q = self.world.query::<&mut Camera>();
+        if let Some(mut c) = q.iter_mut(&mut self.world).next() {
+            *c = camera.clone();
+        }
+        if self.settings() != settings {
+            self.world.insert_resource(settings.clone());
+            self.world.insert_resource(RenderPlan::default());
+            self.world.insert_resource(RenderStats::default());
+            self.world.insert_resource(Materials::default());
+            self.world.insert_resource(Lights::default());
+            self.world.insert_resource(SceneGeometry::default());
+            self.prepared = false;
+            self.started = None;
+        }
+        self.world
+            .insert_resource(Film::new(camera.width, camera.height));
     }
 
     /// Stops renders when `flag` is set (e.g. by Ctrl-C): checked before every

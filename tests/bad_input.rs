@@ -484,3 +484,13 @@ fn a_model_too_large_to_frame_blames_its_bounds_not_a_camera() {
     );
     assert!(!dir.path().join("out.png").exists());
 }
+
+/// Without the `view` feature, `glint view` is a known command that says how to get it.
+#[cfg(not(feature = "view"))]
+#[test]
+fn the_cli_says_how_to_get_the_viewer_when_it_is_not_built_in() {
+    let (ok, stderr, _) = run_cli(Some(GOOD), &["view", "scene.ron"]);
+    assert!(!ok);
+    assert_eq!(stderr.lines().count(), 1, "{stderr}");
+    assert!(stderr.contains("--features view"), "{stderr}");
+}

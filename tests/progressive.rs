@@ -140,3 +140,38 @@ fn ctrl_c_writes_the_image_so_far() {
     assert_eq!(img.dimensions(), (64, 64));
     assert!(img.pixels().any(|p| p.0[0] > 0.0), "the image has samples");
 }
+
+/// `Renderer::restart` (the viewer's entry point): after a change of camera and
+/// settings, its passes give the film a fresh renderer of that view gives, with the
+/// plan and the tables prepared again once (not added to the old ones).
+#[test]
+fn restart_with_a_new_view_and_settings_renders_as_a_fresh_renderer() {
+    let mut r = load(&scene(16, "pixel_samples: 4, pixel_sampling: uniform"));
+    r.render(None, &mut |_| {}).unwrap();
+    let triangles = r
+        .world
+        .resource::<glint::trace::geometry::SceneGeometry>()
+        .tri_positions
+        .len();
+    let mut camera = r.camera().unwrap();
+    camera.position += glam::Vec3::new(0.3, 0.2, 0.0);
+    (camera.width, camera.height) = (12, 10);
+    let mut settings = r.settings().clone();
+    settings.shadows = false;
+    r.restart(&camera, &settings);
+    for sample in 0..r.samples_per_pixel() {
+        r.render_pass(sample, &mut |_| {}).unwrap();
+    }
+    assert!(!r.plan().shadow_rays);
+    let geometry = r.world.resource::<glint::trace::geometry::SceneGeometry>();
+    assert_eq!(geometry.tri_positions.len(), triangles);
+
+    let mut fresh = load(&scene(
+        16,
+        "pixel_samples: 4, pixel_sampling: uniform, shadows: false",
+    ));
+    fresh.restart(&camera, &settings);
+    fresh.render(None, &mut |_| {}).unwrap();
+    assert_eq!((r.film().width, r.film().height), (12, 10));
+    assert_eq!(r.film(), fresh.film());
+}

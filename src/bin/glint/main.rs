@@ -7,6 +7,8 @@ mod debug;
 mod merge;
 mod render;
 mod stress;
+#[cfg(feature = "view")]
+mod view;
 
 use std::process::ExitCode;
 use std::sync::Arc;
@@ -87,6 +89,19 @@ pub fn ctrl_c_flag() -> CliResult<Arc<AtomicBool>> {
     Ok(flag)
 }
 
+#[cfg(feature = "view")]
+fn view(args: &cli::SceneArgs) -> CliResult<()> {
+    check_settings("--set", args.set.iter().map(|(k, v)| (k, v)))?;
+    view::run(&args.scene, &args.overrides()).map_err(CliError::Failed)
+}
+
+#[cfg(not(feature = "view"))]
+fn view(_: &cli::SceneArgs) -> CliResult<()> {
+    Err(CliError::Failed(
+        "this glint was built without the viewer: run `cargo run --release --features view -- view SCENE`".into(),
+    ))
+}
+
 fn info(args: &cli::SceneArgs) -> CliResult<()> {
     check_settings("--set", args.set.iter().map(|(k, v)| (k, v)))?;
     let mut renderer = glint::Renderer::from_file(&args.scene, &args.overrides())?;
@@ -118,6 +133,7 @@ fn main() -> ExitCode {
         Command::Debug(a) => debug::run(a).map(|()| None),
         Command::Merge(a) => merge::run(a).map(|()| None),
         Command::Stress(a) => stress::run(a).map(|()| None),
+        Command::View(a) => view(a).map(|()| None),
     };
     match result {
         Ok(None) => ExitCode::SUCCESS,
