@@ -117,7 +117,7 @@ fn fixture_glb() -> (Value, Vec<u8>) {
             .unwrap();
     let mut bin = std::fs::read(dir.join("glint_fixture.bin")).unwrap();
     let png = std::fs::read(dir.join("checker.png")).unwrap();
-    while bin.len() % 4 != 0 {
+    while !bin.len().is_multiple_of(4) {
         bin.push(0);
     }
     let views = gltf["bufferViews"].as_array_mut().unwrap();
@@ -133,7 +133,7 @@ fn fixture_glb() -> (Value, Vec<u8>) {
 fn glb(json: &[u8], bin: &[u8]) -> Vec<u8> {
     let pad = |data: &[u8], fill: u8| {
         let mut v = data.to_vec();
-        while v.len() % 4 != 0 {
+        while !v.len().is_multiple_of(4) {
             v.push(fill);
         }
         v
