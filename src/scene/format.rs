@@ -322,3 +322,17 @@ pub struct ParallelogramLightDesc {
 fn white() -> Vec3 {
     Vec3::ONE
 }
+
+impl From<&super::components::Camera> for CameraDesc {
+    /// The RON form of a validated camera (to save a view, or to re-validate a built one).
+    fn from(c: &super::components::Camera) -> Self {
+        CameraDesc {
+            position: c.position,
+            look_at: c.look_at,
+            up: c.up,
+            fov_y: c.fov_y_degrees,
+            width: c.width,
+            height: c.height,
+        }
+    }
+}

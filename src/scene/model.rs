@@ -137,14 +137,7 @@ pub fn spawn_model(world: &mut World, path: &Path, overrides: &Overrides) -> Res
             if !c.position.is_finite() {
                 return Err(too_large_to_frame(path, &report, "an automatic camera"));
             }
-            CameraDesc {
-                position: c.position,
-                look_at: c.look_at,
-                up: c.up,
-                fov_y: c.fov_y_degrees,
-                width: c.width,
-                height: c.height,
-            }
+            CameraDesc::from(&c)
         }
     };
     let camera = validate_camera(&camera, path)?;

@@ -177,12 +177,7 @@ impl SceneGeometry {
         if self.use_wide::<V>() {
             if let Some((prim, h)) = self.tri_wide.closest_hit(ray, t_max) {
                 t_max = h.t;
-                best = Some(Hit {
-                    t: h.t,
-                    prim,
-                    kind: PrimKind::Triangle,
-                    bary: Vec3::new(h.b0, h.b1, h.b2),
-                });
+                best = Some(triangle_hit(prim, &h));
             }
         } else if !self.tri_bvh.nodes.is_empty() {
             visitor.begin_hierarchy(PrimKind::Triangle);
@@ -202,12 +197,7 @@ impl SceneGeometry {
             });
             if let (Some((prim, _)), Some((_, h))) = (found, last) {
                 t_max = h.t;
-                best = Some(Hit {
-                    t: h.t,
-                    prim,
-                    kind: PrimKind::Triangle,
-                    bary: Vec3::new(h.b0, h.b1, h.b2),
-                });
+                best = Some(triangle_hit(prim, &h));
             }
         }
         if !self.sphere_bvh.nodes.is_empty() {
@@ -372,5 +362,15 @@ impl Crossings {
         };
         all.sort_unstable_by(|a, b| a.0.total_cmp(&b.0));
         all
+    }
+}
+
+/// The scene's hit record of triangle `prim`.
+fn triangle_hit(prim: u32, h: &TriangleHit) -> Hit {
+    Hit {
+        t: h.t,
+        prim,
+        kind: PrimKind::Triangle,
+        bary: Vec3::new(h.b0, h.b1, h.b2),
     }
 }

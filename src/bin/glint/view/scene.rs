@@ -84,7 +84,7 @@ impl ViewScene {
             }
         }
         let file = SceneFile {
-            camera: camera_desc(&camera),
+            camera: CameraDesc::from(&camera),
             settings: renderer.settings().clone(),
             materials: Default::default(),
             entities,
@@ -113,7 +113,7 @@ impl ViewScene {
     /// The scene with `camera` and `settings` in place of its own.
     pub fn with_view(&self, camera: &Camera, settings: &Settings) -> SceneFile {
         let mut file = self.file.clone();
-        file.camera = camera_desc(camera);
+        file.camera = CameraDesc::from(camera);
         file.settings = settings.clone();
         file
     }
@@ -178,17 +178,6 @@ pub fn interior_camera(min: Vec3, max: Vec3, camera: &Camera) -> Option<Camera> 
         fov_y_degrees: 60.0,
         ..camera.clone()
     })
-}
-
-fn camera_desc(c: &Camera) -> CameraDesc {
-    CameraDesc {
-        position: c.position,
-        look_at: c.look_at,
-        up: c.up,
-        fov_y: c.fov_y_degrees,
-        width: c.width,
-        height: c.height,
-    }
 }
 
 fn absolute(path: &Path) -> String {

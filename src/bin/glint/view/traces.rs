@@ -5,6 +5,7 @@ use std::collections::BTreeSet;
 
 use egui::{Align2, Color32, FontId, Painter, Pos2, Rect, Stroke, pos2, vec2};
 use glam::{Vec2, Vec3};
+use glint::debug::overlay::box_edges;
 use glint::debug::{DebugPrimitive, DebugRequest, DebugSession, Feature, Shape};
 use glint::scene::texture::Texture;
 use glint::scene::{Camera, Settings};
@@ -238,26 +239,6 @@ pub fn draw_traces(
             }
         }
     }
-}
-
-/// The 12 edges of a box.
-fn box_edges(min: Vec3, max: Vec3) -> Vec<(Vec3, Vec3)> {
-    let corner = |i: u32| {
-        Vec3::new(
-            if i & 1 == 0 { min.x } else { max.x },
-            if i & 2 == 0 { min.y } else { max.y },
-            if i & 4 == 0 { min.z } else { max.z },
-        )
-    };
-    let mut edges = Vec::with_capacity(12);
-    for i in 0..8u32 {
-        for bit in [1, 2, 4] {
-            if i & bit == 0 {
-                edges.push((corner(i), corner(i | bit)));
-            }
-        }
-    }
-    edges
 }
 
 /// Where the 2D insets go: the image's bottom-left corner, one column per trace.
