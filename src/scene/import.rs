@@ -17,6 +17,25 @@ pub fn asset_err(path: &Path, error: impl Into<AssetError>) -> GlintError {
     }
 }
 
+thread_local! {
+    /// Whether a panic on this thread is expected and caught by [`guarded`].
+    static QUIET_PANICS: std::cell::Cell<bool> = const { std::cell::Cell::new(false) };
+}
+
+/// Wraps the process's panic hook, once, so that it stays silent on a thread
+/// inside [`guarded`] and behaves as before everywhere else.
+fn install_quiet_hook() {
+    static INSTALL: std::sync::Once = std::sync::Once::new();
+    INSTALL.call_once(|| {
+        let previous = std::panic::take_hook();
+        std::panic::set_hook(Box::new(move |info| {
+            if !QUIET_PANICS.get() {
+                previous(info);
+            }
+        }));
+    });
+}
+
 /// Runs an importer behind a guard: the `gltf` and `tobj` crates panic on some malformed
 /// files (an attribute naming an accessor that does not exist, an MTL colour with two
 /// components), and such a panic becomes an error naming the file instead of aborting.
@@ -25,11 +44,13 @@ pub fn guarded<T>(
     format: &'static str,
     import: impl FnOnce() -> Result<T>,
 ) -> Result<T> {
-    // The default hook would print the dependency's panic before our error line.
-    let hook = std::panic::take_hook();
-    std::panic::set_hook(Box::new(|_| {}));
+    // The hook would print the dependency's panic before our error line. It is
+    // silenced for this thread only: swapping the process-wide hook per import would
+    // race with imports (or panics) on other threads.
+    install_quiet_hook();
+    let was_quiet = QUIET_PANICS.replace(true);
     let result = std::panic::catch_unwind(std::panic::AssertUnwindSafe(import));
-    std::panic::set_hook(hook);
+    QUIET_PANICS.set(was_quiet);
     result.unwrap_or_else(|panic| {
         let why = panic
             .downcast_ref::<&str>()
