@@ -387,6 +387,17 @@ fn sample_grid_shows_the_pattern() {
         _ => None,
     });
     assert_eq!(grid, Some((None, 5)));
+    let what = |s: &mut DebugSession| {
+        s.primitives()
+            .into_iter()
+            .find(|p| matches!(p.shape, Shape::SampleGrid { .. }))
+            .map(|p| p.values.what)
+    };
+    assert_eq!(what(&mut s), Some("uniform samples"));
+    // Under the Sobol' sampler the offsets are its points, and the label says so.
+    file.settings.sampler = glint::scene::SamplerKind::Sobol;
+    let mut s = debug(&file, only(10, 10, &[Feature::Samples]));
+    assert_eq!(what(&mut s), Some("Sobol' samples"));
 
     // One sample per pixel: multisampling is off in the scene, so nothing is emitted.
     file.settings.pixel_samples = 1;

@@ -6,9 +6,10 @@ use super::{SAMPLE_POINT, Spawner, prim};
 use crate::debug::log::DebugTrace;
 use crate::debug::primitives::{Feature, Shape, Values};
 use crate::sampling::pixel_mode;
-use crate::scene::{PixelSampling, Settings};
+use crate::scene::{PixelSampling, SamplerKind, Settings};
 
-/// Multisampling: the pixel's sample offsets on its grid, with strata when stratified.
+/// Multisampling: the pixel's sample offsets on its grid, with strata when stratified,
+/// labelled by the pattern that placed them.
 pub fn emit_samples(mut spawner: Spawner, log: Res<DebugTrace>, settings: Res<Settings>) {
     let strata = match pixel_mode(&settings) {
         PixelSampling::Uniform => None,
@@ -22,9 +23,10 @@ pub fn emit_samples(mut spawner: Spawner, log: Res<DebugTrace>, settings: Res<Se
         SAMPLE_POINT,
         Shape::SampleGrid { strata, points },
         Values {
-            what: match strata {
-                Some(_) => "stratified samples",
-                None => "uniform samples",
+            what: match (strata, settings.sampler) {
+                (Some(_), _) => "stratified samples",
+                (None, SamplerKind::Sobol) => "Sobol' samples",
+                (None, _) => "uniform samples",
             },
             ..Default::default()
         },
