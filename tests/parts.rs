@@ -303,7 +303,15 @@ fn the_cli_merges_parts_into_the_bytes_of_a_single_render() {
             std::fs::read(d.join(out)).unwrap() == std::fs::read(d.join(single)).unwrap(),
             "{out} differs from the single render"
         );
+        assert!(!err.contains("warning"), "{err}");
     }
+    // Fewer samples than the scene's pixel_samples merge, with a warning that says so.
+    let (ok, err) = glint(d, &["merge", "p1.exr", "-o", "few.png"]);
+    assert!(ok, "{err}");
+    assert!(
+        err.contains("warning: the parts hold samples 0..3 of the 16"),
+        "{err}"
+    );
     // Refusals: one line naming the file, exit code 1.
     for (args, named, why) in [
         (

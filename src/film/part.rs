@@ -21,6 +21,8 @@ use sha2::{Digest, Sha256};
 
 use super::{Film, add_exact, write_atomically};
 use crate::error::{GlintError, Result};
+use crate::sampling::samples_per_pixel;
+use crate::scene::Settings;
 use crate::scene::format::{EntityDesc, GeometryDesc};
 use crate::scene::model::SceneFormat;
 use crate::scene::read_scene;
@@ -111,6 +113,15 @@ pub struct PartInfo {
 }
 
 impl PartInfo {
+    /// The samples per pixel of a full render with the part's settings (the scene's
+    /// `pixel_samples`, rounded as the render rounds it), read back from `settings`;
+    /// None if that text does not parse.
+    pub fn full_samples(&self) -> Option<u32> {
+        let (settings, _camera) = self.settings.rsplit_once(" camera ")?;
+        let settings: Settings = ron::from_str(settings).ok()?;
+        Some(samples_per_pixel(&settings))
+    }
+
     /// The attribute text: one `key: value` line per field.
     fn to_text(&self) -> String {
         let s = &self.samples;

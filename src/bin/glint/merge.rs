@@ -109,6 +109,11 @@ pub fn run(args: &MergeArgs) -> CliResult<()> {
         )));
     }
     let total = samples.end;
+    if let Some(full) = parts[0].1.info.full_samples().filter(|&full| total < full) {
+        eprintln!(
+            "warning: the parts hold samples 0..{total} of the {full} a full render takes (pixel_samples): the image is noisier than a single render's"
+        );
+    }
     let encoding = if args.srgb {
         Encoding::Srgb
     } else {
