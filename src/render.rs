@@ -133,13 +133,7 @@ impl std::fmt::Display for RenderSummary {
             )?;
         }
         if let Some(e) = &self.error {
-            write!(
-                f,
-                "; estimated error: RMSE {:.3e}, relMSE {:.3e} ({})",
-                e.rmse,
-                e.rel_mse,
-                e.method.name()
-            )?;
+            write!(f, "; estimated error: {e}")?;
         }
         match self.ended {
             Ended::AllSamples => {}

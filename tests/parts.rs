@@ -9,6 +9,7 @@ use std::process::Command;
 
 use glint::Renderer;
 use glint::film::Film;
+use glint::film::estimate::EstimateMethod;
 use glint::film::part::{
     Crop, Part, merge_into_part, merge_parts, read_part, scene_hash, write_part,
 };
@@ -156,6 +157,46 @@ fn parts_survive_their_files_bit_for_bit() {
     let again = dir.path().join("again.exr");
     write_part(&again, &p).unwrap();
     assert!(std::fs::read(&path).unwrap() == std::fs::read(&again).unwrap());
+}
+
+/// A merged image estimates its own error as a single render does: the moments and the
+/// odd replica travel with the parts (the moments merge by Chan's pairwise update), and
+/// survive the part files' f32 channels.
+#[test]
+fn merged_parts_carry_the_error_estimate() {
+    let dir = temp_dir();
+    for sampler in ["independent", "sobol"] {
+        let overrides = || {
+            let mut o = overrides(false);
+            o.set.push(("sampler".into(), sampler.into()));
+            o
+        };
+        let mut r = Renderer::from_file(&scene(), &overrides()).unwrap();
+        r.render(None, &mut |_| {}).unwrap();
+        let method = EstimateMethod::for_settings(r.settings());
+        let expected = r.film().error_estimate(method).unwrap();
+        let parts: Vec<_> = [0..5, 5..6, 6..SPP]
+            .into_iter()
+            .map(|samples| {
+                let mut r = Renderer::from_file(&scene(), &overrides()).unwrap();
+                r.render_part(samples.clone(), Crop::full(W, H), &mut |_| {})
+                    .unwrap();
+                let path = dir.path().join(format!("{sampler}{}.exr", samples.start));
+                write_part(&path, &r.part("hash".into(), samples, Crop::full(W, H))).unwrap();
+                (path.clone(), read_part(&path).unwrap())
+            })
+            .collect();
+        let got = merged(&parts).error_estimate(method).unwrap();
+        for (what, g, e) in [
+            ("RMSE", got.rmse, expected.rmse),
+            ("relMSE", got.rel_mse, expected.rel_mse),
+        ] {
+            assert!(
+                e > 0.0 && (g / e - 1.0).abs() < 1e-5,
+                "{sampler} {what}: {g} vs {e}"
+            );
+        }
+    }
 }
 
 /// Measures how often a pixel's plain `f64` sum (what the film held before it kept the

@@ -28,6 +28,18 @@ pub enum EstimateMethod {
     Replicas,
 }
 
+impl std::fmt::Display for ErrorEstimate {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        write!(
+            f,
+            "RMSE {:.3e}, relMSE {:.3e} ({})",
+            self.rmse,
+            self.rel_mse,
+            self.method.name()
+        )
+    }
+}
+
 impl EstimateMethod {
     /// The honest method for these settings.
     pub fn for_settings(settings: &Settings) -> Self {

@@ -31,7 +31,7 @@ use crate::scene::read_scene;
 pub const PART_ATTRIBUTE: &str = "glint.part";
 
 /// The version of the part format this build reads and writes.
-const PART_VERSION: u32 = 1;
+const PART_VERSION: u32 = 2;
 
 /// A window of the image: columns `x0..x1`, rows `y0..y1` (row 0 at the top).
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -113,13 +113,17 @@ pub struct PartInfo {
 }
 
 impl PartInfo {
-    /// The samples per pixel of a full render with the part's settings (the scene's
-    /// `pixel_samples`, rounded as the render rounds it), read back from `settings`;
-    /// None if that text does not parse.
-    pub fn full_samples(&self) -> Option<u32> {
+    /// The settings the part was rendered with, read back from `settings`; None if
+    /// that text does not parse.
+    pub fn parsed_settings(&self) -> Option<Settings> {
         let (settings, _camera) = self.settings.rsplit_once(" camera ")?;
-        let settings: Settings = ron::from_str(settings).ok()?;
-        Some(samples_per_pixel(&settings))
+        ron::from_str(settings).ok()
+    }
+
+    /// The samples per pixel of a full render with the part's settings (the scene's
+    /// `pixel_samples`, rounded as the render rounds it).
+    pub fn full_samples(&self) -> Option<u32> {
+        self.parsed_settings().map(|s| samples_per_pixel(&s))
     }
 
     /// The attribute text: one `key: value` line per field.
@@ -198,6 +202,9 @@ pub fn crop_film(film: &Film, crop: Crop) -> Film {
             out.sum[i] = film.sum[row + x];
             out.err[i] = film.err[row + x];
             out.count[i] = film.count[row + x];
+            out.m2[i] = film.m2[row + x];
+            out.replica_sum[i] = film.replica_sum[row + x];
+            out.replica_count[i] = film.replica_count[row + x];
             i += 1;
         }
     }
@@ -283,6 +290,20 @@ pub fn write_part(path: &Path, part: &Part) -> Result<()> {
         "count",
         FlatSamples::U32(film.count.clone()),
     ));
+    // The moments serve only the error estimate: f32 keeps them small.
+    for (c, rgb) in ["R", "G", "B"].into_iter().enumerate() {
+        for (name, values) in [("m2", &film.m2), ("replica", &film.replica_sum)] {
+            let v = values.iter().map(|v| v[c] as f32).collect();
+            channels.push(AnyChannel::new(
+                format!("{name}.{rgb}").as_str(),
+                FlatSamples::F32(v),
+            ));
+        }
+    }
+    channels.push(AnyChannel::new(
+        "replica.count",
+        FlatSamples::U32(film.replica_count.clone()),
+    ));
     let image = film.image();
     for (c, name) in ["R", "G", "B"].into_iter().enumerate() {
         let mean = image.iter().map(|p| p[c]).collect();
@@ -355,6 +376,19 @@ pub fn read_part(path: &Path) -> Result<Part> {
         }
     }
     film.count.clone_from(channel("count")?);
+    film.replica_count.clone_from(channel("replica.count")?);
+    for (c, rgb) in ["R", "G", "B"].into_iter().enumerate() {
+        for (name, target) in [("m2", &mut film.m2), ("replica", &mut film.replica_sum)] {
+            let name = format!("{name}.{rgb}");
+            let found = layer.channel_data.list.iter().find(|ch| ch.name == *name);
+            let Some(FlatSamples::F32(v)) = found.map(|ch| &ch.sample_data) else {
+                return Err(part_error(path, format!("no f32 channel {name}")));
+            };
+            for (t, &x) in target.iter_mut().zip(v) {
+                t[c] = f64::from(x);
+            }
+        }
+    }
     Ok(Part { info, film })
 }
 
@@ -423,9 +457,12 @@ pub fn merge_parts(parts: &[(PathBuf, Part)]) -> Result<(Film, Range<u32>)> {
                 }
                 next[p] = samples.end;
                 owner[p] = Some(i);
+                merge_moments(&mut film, p, &part.film, j);
                 add_exact(&mut film.sum[p], &mut film.err[p], part.film.sum[j]);
                 film.err[p] += part.film.err[j];
                 film.count[p] += part.film.count[j];
+                film.replica_sum[p] += part.film.replica_sum[j];
+                film.replica_count[p] += part.film.replica_count[j];
                 j += 1;
             }
         }
@@ -443,6 +480,19 @@ pub fn merge_parts(parts: &[(PathBuf, Part)]) -> Result<(Film, Range<u32>)> {
         });
     }
     Ok((film, from..total))
+}
+
+/// Adds the squared deviations of pixel `j` of `part` to those of pixel `p` of `film`,
+/// before their sums and counts are merged: Chan, Golub and LeVeque's pairwise update,
+/// `m2 = m2_a + m2_b + (mean_b - mean_a)^2 n_a n_b / (n_a + n_b)`.
+fn merge_moments(film: &mut Film, p: usize, part: &Film, j: usize) {
+    let (na, nb) = (f64::from(film.count[p]), f64::from(part.count[j]));
+    if na == 0.0 || nb == 0.0 {
+        film.m2[p] += part.m2[j];
+        return;
+    }
+    let delta = (part.sum[j] + part.err[j]) / nb - (film.sum[p] + film.err[p]) / na;
+    film.m2[p] += part.m2[j] + delta * delta * (na * nb / (na + nb));
 }
 
 /// Merges parts (see [`merge_parts`]) into one part of the whole image, which merges

@@ -5,6 +5,7 @@
 use std::path::PathBuf;
 
 use glint::Renderer;
+use glint::film::estimate::EstimateMethod;
 use glint::film::part::{Crop, merge_into_part, merge_parts, read_part, scene_hash, write_part};
 use glint::film::{Encoding, write_image};
 
@@ -109,6 +110,7 @@ pub fn run(args: &MergeArgs) -> CliResult<()> {
         )));
     }
     let total = samples.end;
+    let settings = parts[0].1.info.parsed_settings();
     if let Some(full) = parts[0].1.info.full_samples().filter(|&full| total < full) {
         eprintln!(
             "warning: the parts hold samples 0..{total} of the {full} a full render takes (pixel_samples): the image is noisier than a single render's"
@@ -127,8 +129,12 @@ pub fn run(args: &MergeArgs) -> CliResult<()> {
         encoding,
     )?;
     if !args.quiet {
+        let estimate = settings
+            .and_then(|s| film.error_estimate(EstimateMethod::for_settings(&s)))
+            .map(|e| format!("; estimated error: {e}"))
+            .unwrap_or_default();
         eprintln!(
-            "{}: {}x{}, {total} spp, merged from {} parts",
+            "{}: {}x{}, {total} spp, merged from {} parts{estimate}",
             args.output.display(),
             film.width,
             film.height,
