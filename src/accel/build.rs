@@ -2,11 +2,18 @@
 //! SAH-based Bounding Volume Hierarchies", IEEE Symposium on Interactive Ray
 //! Tracing 2007, and an object-median split for comparison.
 //!
-//! The top of the recursion runs in parallel with `rayon::join`; each parallel
-//! branch builds its subtree into its own vector, which the parent appends in
-//! a fixed order, so the node array is identical whatever the thread count.
+//! The builder moves [`PrimRef`]s (a primitive's box and index together), so
+//! binning and partitioning read memory in order instead of gathering boxes
+//! through an index array. Each node's bounds come from its parent (from the
+//! SAH bins and the partition pass), so a node's primitives are read twice:
+//! once to bin them, once to partition them. The top of the recursion runs in
+//! parallel with `rayon::join`, and nodes too large for that to have split the
+//! work yet bin in parallel chunks. Every parallel step combines its parts in a
+//! fixed order with exact operations (min, max, integer sums), so the tree is
+//! identical whatever the thread count.
 
 use glam::Vec3;
+use rayon::prelude::*;
 
 use super::Aabb;
 use super::bvh::{Bvh, BvhNode, SplitMethod};
@@ -19,39 +26,205 @@ const MIN_LEAF: usize = 4;
 const MAX_LEAF: usize = 8;
 /// Subtrees at least this large are built in parallel.
 const PARALLEL_MIN: usize = 4096;
+/// Nodes at least this large are binned in parallel chunks of this size.
+const PARALLEL_BIN_CHUNK: usize = 1 << 15;
 /// From this depth on, splits are by median, which halves the count, so the
 /// tree stays within the traversal stack (32 + log2(u32::MAX) < 64 levels).
 const SAH_DEPTH_LIMIT: u32 = 32;
 /// Cost of one node visit relative to one primitive test in the SAH.
 const TRAVERSAL_COST: f32 = 1.0;
 
-struct Ctx<'a> {
-    bounds: &'a [Aabb],
-    centroids: Vec<Vec3>,
-    split: SplitMethod,
+/// Four lanes (x, y, z, unused): written lane by lane so the compiler keeps
+/// them in one SIMD register.
+type Lanes = [f32; 4];
+
+/// A box in [`Lanes`]; what binning and partitioning accumulate.
+#[derive(Clone, Copy)]
+struct Box4 {
+    min: Lanes,
+    max: Lanes,
+}
+
+impl Box4 {
+    const EMPTY: Box4 = Box4 {
+        min: [f32::INFINITY; 4],
+        max: [f32::NEG_INFINITY; 4],
+    };
+
+    /// Grows to contain the box `min..max`, ignoring a NaN coordinate in it
+    /// (`self` starts empty and so never holds one); compare-and-select, which
+    /// vectorises. Finite input gives exactly [`Aabb::union`]'s box.
+    #[inline(always)]
+    fn grow(&mut self, min: Lanes, max: Lanes) {
+        for i in 0..4 {
+            self.min[i] = if min[i] < self.min[i] {
+                min[i]
+            } else {
+                self.min[i]
+            };
+            self.max[i] = if max[i] > self.max[i] {
+                max[i]
+            } else {
+                self.max[i]
+            };
+        }
+    }
+
+    #[inline(always)]
+    fn union(mut self, o: Box4) -> Box4 {
+        self.grow(o.min, o.max);
+        self
+    }
+
+    fn aabb(&self) -> Aabb {
+        let [x0, y0, z0, _] = self.min;
+        let [x1, y1, z1, _] = self.max;
+        Aabb::new(Vec3::new(x0, y0, z0), Vec3::new(x1, y1, z1))
+    }
+
+    /// Same value as [`Aabb::surface_area`].
+    #[inline(always)]
+    fn surface_area(&self) -> f32 {
+        self.aabb().surface_area()
+    }
+}
+
+/// A primitive's box and its index, moved as one 32-byte unit by the
+/// partitions; each corner loads as one [`Lanes`]. The unused fourth lane of
+/// `hi` holds the index's bits (see [`PrimRef::hi`]).
+#[derive(Clone, Copy)]
+#[repr(C, align(16))]
+struct PrimRef {
+    lo: Lanes,
+    hi: Lanes,
+}
+
+impl PrimRef {
+    /// A NaN coordinate of one corner takes the other corner's, so that the
+    /// rest of the box is still covered (boxes grow past NaN, see [`Box4::grow`]).
+    fn new(index: usize, b: &Aabb) -> PrimRef {
+        let pick = |v: f32, other: f32| if v.is_nan() { other } else { v };
+        let (lo, hi) = (b.min, b.max);
+        PrimRef {
+            lo: [pick(lo.x, hi.x), pick(lo.y, hi.y), pick(lo.z, hi.z), 0.0],
+            hi: [
+                pick(hi.x, lo.x),
+                pick(hi.y, lo.y),
+                pick(hi.z, lo.z),
+                f32::from_bits(index as u32),
+            ],
+        }
+    }
+
+    fn index(&self) -> u32 {
+        self.hi[3].to_bits()
+    }
+
+    /// The upper corner with the index's lane zeroed: growing boxes ignores
+    /// that lane, but arithmetic on it could meet subnormals (slow) or NaN.
+    #[inline(always)]
+    fn hi(&self) -> Lanes {
+        [self.hi[0], self.hi[1], self.hi[2], 0.0]
+    }
+
+    /// Same expression as [`Aabb::centroid`], so the same bins.
+    #[inline(always)]
+    fn centroid(&self) -> Lanes {
+        let (lo, hi) = (self.lo, self.hi());
+        std::array::from_fn(|i| (lo[i] + hi[i]) * 0.5)
+    }
+}
+
+/// A node's box and the box of its primitives' centroids.
+#[derive(Clone, Copy)]
+struct NodeBounds {
+    node: Box4,
+    centroids: Box4,
+}
+
+impl NodeBounds {
+    const EMPTY: NodeBounds = NodeBounds {
+        node: Box4::EMPTY,
+        centroids: Box4::EMPTY,
+    };
+
+    fn of(refs: &[PrimRef]) -> NodeBounds {
+        let fold = |mut acc: NodeBounds, r: &PrimRef| {
+            acc.node.grow(r.lo, r.hi);
+            let c = r.centroid();
+            acc.centroids.grow(c, c);
+            acc
+        };
+        if refs.len() >= 2 * PARALLEL_BIN_CHUNK {
+            refs.par_chunks(PARALLEL_BIN_CHUNK)
+                .map(|c| c.iter().fold(NodeBounds::EMPTY, fold))
+                .reduce(|| NodeBounds::EMPTY, NodeBounds::union)
+        } else {
+            refs.iter().fold(NodeBounds::EMPTY, fold)
+        }
+    }
+
+    fn union(self, o: NodeBounds) -> NodeBounds {
+        NodeBounds {
+            node: self.node.union(o.node),
+            centroids: self.centroids.union(o.centroids),
+        }
+    }
+}
+
+/// Nodes built by one task, in depth-first order; child offsets are relative
+/// to the task's subtree, whose first node lands at `shift` in the final array.
+struct Piece {
+    nodes: Vec<BvhNode>,
+    shift: u32,
 }
 
 impl Bvh {
     /// Builds over primitive bounds (centroids = bounds' centres). Empty input → no nodes.
     pub fn build(bounds: &[Aabb], split: SplitMethod) -> Bvh {
-        if bounds.is_empty() {
-            return Bvh::default();
-        }
-        let ctx = Ctx {
-            bounds,
-            centroids: bounds.iter().map(Aabb::centroid).collect(),
-            split,
-        };
-        let mut prim_indices: Vec<u32> = (0..bounds.len() as u32).collect();
-        let mut nodes = Vec::with_capacity(node_estimate(bounds.len()));
-        build_node(&ctx, &mut prim_indices, 0, 1, &mut nodes);
-        // The estimate may overshoot (smaller leaves): give back what is unused.
-        nodes.shrink_to_fit();
-        Bvh {
-            nodes,
-            prim_indices,
-        }
+        build(bounds, split)
     }
+}
+
+fn build(bounds: &[Aabb], split: SplitMethod) -> Bvh {
+    if bounds.is_empty() {
+        return Bvh::default();
+    }
+    let make = |(i, b): (usize, &Aabb)| PrimRef::new(i, b);
+    let mut refs: Vec<PrimRef> = if bounds.len() >= 2 * PARALLEL_BIN_CHUNK {
+        bounds.par_iter().enumerate().map(make).collect()
+    } else {
+        bounds.iter().enumerate().map(make).collect()
+    };
+    let root = NodeBounds::of(&refs);
+    let (pieces, count) = build_subtree(split, &mut refs, 0, 1, root);
+    let prim_indices: Vec<u32> = refs.iter().map(PrimRef::index).collect();
+    drop(refs);
+    Bvh {
+        nodes: assemble(pieces, count),
+        prim_indices,
+    }
+}
+
+/// Concatenates the pieces, moving each one's child offsets to where it lands.
+fn assemble(mut pieces: Vec<Piece>, count: u32) -> Vec<BvhNode> {
+    if pieces.len() == 1 {
+        let mut nodes = pieces.pop().unwrap().nodes;
+        nodes.shrink_to_fit();
+        return nodes;
+    }
+    let mut nodes = Vec::with_capacity(count as usize);
+    for p in pieces {
+        debug_assert_eq!(p.shift as usize, nodes.len());
+        nodes.extend(p.nodes.iter().map(|n| {
+            let mut n = *n;
+            if !n.is_leaf() {
+                n.offset += p.shift;
+            }
+            n
+        }));
+    }
+    nodes
 }
 
 /// Nodes to reserve for `n` primitives: SAH leaves hold 3.3 primitives on average
@@ -61,101 +234,219 @@ fn node_estimate(n: usize) -> usize {
     n / 3 * 2 + 2
 }
 
-/// Appends the subtree over `indices` to `out`. Child offsets are indices into
-/// `out`; leaf offsets are global because `indices` starts at `prim_base` in
-/// the final `prim_indices`.
-fn build_node(ctx: &Ctx, indices: &mut [u32], prim_base: u32, depth: u32, out: &mut Vec<BvhNode>) {
-    let mut node_bounds = Aabb::EMPTY;
-    let mut centroid_bounds = Aabb::EMPTY;
-    for &i in indices.iter() {
-        node_bounds = node_bounds.union(ctx.bounds[i as usize]);
-        centroid_bounds.grow(ctx.centroids[i as usize]);
+/// Builds the subtree over `refs`, splitting its two halves in parallel while
+/// they are large; returns its pieces in order and its node count.
+fn build_subtree(
+    method: SplitMethod,
+    refs: &mut [PrimRef],
+    prim_base: u32,
+    depth: u32,
+    b: NodeBounds,
+) -> (Vec<Piece>, u32) {
+    let n = refs.len();
+    let mut bins = Bins::empty(Box4::EMPTY);
+    if n < PARALLEL_MIN {
+        let mut nodes = Vec::with_capacity(node_estimate(n));
+        build_node(method, refs, prim_base, depth, b, &mut bins, &mut nodes);
+        let count = nodes.len() as u32;
+        return (vec![Piece { nodes, shift: 0 }], count);
     }
-    let n = indices.len();
-    let Some(mid) = split(ctx, indices, node_bounds, centroid_bounds, depth) else {
-        out.push(BvhNode::leaf(node_bounds, prim_base, n as u32));
+    let Some((mid, lb, rb)) = split(method, refs, b, depth, &mut bins) else {
+        let leaf = BvhNode::leaf(b.node.aabb(), prim_base, n as u32);
+        return (
+            vec![Piece {
+                nodes: vec![leaf],
+                shift: 0,
+            }],
+            1,
+        );
+    };
+    let (left, right) = refs.split_at_mut(mid);
+    let ((lp, ln), (rp, rn)) = rayon::join(
+        || build_subtree(method, left, prim_base, depth + 1, lb),
+        || build_subtree(method, right, prim_base + mid as u32, depth + 1, rb),
+    );
+    let mut pieces = Vec::with_capacity(1 + lp.len() + rp.len());
+    pieces.push(Piece {
+        nodes: vec![BvhNode::interior(b.node.aabb(), 1 + ln)],
+        shift: 0,
+    });
+    pieces.extend(lp.into_iter().map(|p| Piece {
+        shift: p.shift + 1,
+        ..p
+    }));
+    pieces.extend(rp.into_iter().map(|p| Piece {
+        shift: p.shift + 1 + ln,
+        ..p
+    }));
+    (pieces, 1 + ln + rn)
+}
+
+/// Appends the subtree over `refs` to `out`. Child offsets are indices into
+/// `out`; leaf offsets are global because `refs` starts at `prim_base` in
+/// the final primitive order.
+fn build_node(
+    method: SplitMethod,
+    refs: &mut [PrimRef],
+    prim_base: u32,
+    depth: u32,
+    b: NodeBounds,
+    bins: &mut Bins,
+    out: &mut Vec<BvhNode>,
+) {
+    let n = refs.len();
+    let Some((mid, lb, rb)) = split(method, refs, b, depth, bins) else {
+        out.push(BvhNode::leaf(b.node.aabb(), prim_base, n as u32));
         return;
     };
     let me = out.len();
-    out.push(BvhNode::interior(node_bounds, 0));
-    let (left, right) = indices.split_at_mut(mid);
-    let right_base = prim_base + mid as u32;
-    if n >= PARALLEL_MIN {
-        let (l, r) = rayon::join(
-            || {
-                let mut v = Vec::with_capacity(node_estimate(left.len()));
-                build_node(ctx, left, prim_base, depth + 1, &mut v);
-                v
-            },
-            || {
-                let mut v = Vec::with_capacity(node_estimate(right.len()));
-                build_node(ctx, right, right_base, depth + 1, &mut v);
-                v
-            },
-        );
-        append_shifted(out, &l);
-        out[me].offset = out.len() as u32;
-        append_shifted(out, &r);
-    } else {
-        build_node(ctx, left, prim_base, depth + 1, out);
-        out[me].offset = out.len() as u32;
-        build_node(ctx, right, right_base, depth + 1, out);
-    }
+    out.push(BvhNode::interior(b.node.aabb(), 0));
+    let (left, right) = refs.split_at_mut(mid);
+    build_node(method, left, prim_base, depth + 1, lb, bins, out);
+    out[me].offset = out.len() as u32;
+    build_node(
+        method,
+        right,
+        prim_base + mid as u32,
+        depth + 1,
+        rb,
+        bins,
+        out,
+    );
 }
 
-/// Appends a subtree built in its own vector, moving its child offsets to where it lands.
-fn append_shifted(out: &mut Vec<BvhNode>, sub: &[BvhNode]) {
-    let base = out.len() as u32;
-    out.extend(sub.iter().map(|n| {
-        let mut n = *n;
-        if !n.is_leaf() {
-            n.offset += base;
-        }
-        n
-    }));
-}
-
-/// Partitions `indices` and returns the size of the first part, or None for a leaf.
+/// Partitions `refs`; returns the size of the first part and both parts'
+/// bounds, or None for a leaf.
 fn split(
-    ctx: &Ctx,
-    indices: &mut [u32],
-    node_bounds: Aabb,
-    centroid_bounds: Aabb,
+    method: SplitMethod,
+    refs: &mut [PrimRef],
+    b: NodeBounds,
     depth: u32,
-) -> Option<usize> {
-    let n = indices.len();
+    bins: &mut Bins,
+) -> Option<(usize, NodeBounds, NodeBounds)> {
+    let n = refs.len();
     if n <= MIN_LEAF {
         return None;
     }
-    let ext = centroid_bounds.extent();
+    let ext = b.centroids.aabb().extent();
     // All centroids coincide (or are NaN): no plane separates them.
     let widest = ext.max_element();
     if widest.is_nan() || widest <= 0.0 {
         return None;
     }
-    if ctx.split == SplitMethod::Median || depth >= SAH_DEPTH_LIMIT {
-        return Some(median_split(ctx, indices, ext));
+    if method == SplitMethod::Median || depth >= SAH_DEPTH_LIMIT {
+        return Some(median_split(refs, ext));
     }
-    let area = node_bounds.surface_area();
+    let area = b.node.surface_area();
     let sah = if area > 0.0 {
-        best_sah_plane(ctx, indices, centroid_bounds)
+        bins.fill(refs, b.centroids);
+        best_sah_plane(bins)
     } else {
         // Flat, zero-area node (e.g. collinear points): SAH is undefined.
         None
     };
     match sah {
         Some(plane) if n > MAX_LEAF || TRAVERSAL_COST + plane.cost / area < n as f32 => {
-            let mid = partition(indices, |i| plane.is_left(ctx.centroids[i as usize]));
+            let (mid, lc, rc) = partition(refs, bins, &plane);
             // Binning and partition share `bin_of`, so both sides are non-empty;
             // this guards against it anyway.
             if mid == 0 || mid == n {
-                Some(median_split(ctx, indices, ext))
-            } else {
-                Some(mid)
+                return Some(median_split(refs, ext));
+            }
+            let (ln, rn) = bins.boxes_around(&plane);
+            Some((
+                mid,
+                NodeBounds {
+                    node: ln,
+                    centroids: lc,
+                },
+                NodeBounds {
+                    node: rn,
+                    centroids: rc,
+                },
+            ))
+        }
+        _ if n > MAX_LEAF => Some(median_split(refs, ext)),
+        _ => None,
+    }
+}
+
+/// Per axis, the count and box of the primitives whose centroids fall in each bin.
+struct Bins {
+    min: Lanes,
+    scale: Lanes,
+    counts: [[u32; BINS]; 3],
+    boxes: [[Box4; BINS]; 3],
+}
+
+impl Bins {
+    fn empty(centroids: Box4) -> Bins {
+        let mut bins = Bins {
+            min: [0.0; 4],
+            scale: [0.0; 4],
+            counts: [[0; BINS]; 3],
+            boxes: [[Box4::EMPTY; BINS]; 3],
+        };
+        bins.reset(centroids);
+        bins
+    }
+
+    /// Bins `refs` into `self` (scratch reused across nodes: no copies of
+    /// its 1.7 KB), in parallel chunks when there are many.
+    fn fill(&mut self, refs: &[PrimRef], centroids: Box4) {
+        if refs.len() >= 2 * PARALLEL_BIN_CHUNK {
+            *self = refs
+                .par_chunks(PARALLEL_BIN_CHUNK)
+                .map(|c| {
+                    let mut bins = Bins::empty(centroids);
+                    bins.add(c);
+                    bins
+                })
+                .reduce(|| Bins::empty(centroids), Bins::merge);
+        } else {
+            self.reset(centroids);
+            self.add(refs);
+        }
+    }
+
+    fn reset(&mut self, centroids: Box4) {
+        let (min, max) = (centroids.min, centroids.max);
+        self.min = min;
+        self.scale = std::array::from_fn(|i| {
+            let ext = max[i] - min[i];
+            if ext > 0.0 { BINS as f32 / ext } else { 0.0 }
+        });
+        self.counts = [[0; BINS]; 3];
+        self.boxes = [[Box4::EMPTY; BINS]; 3];
+    }
+
+    fn add(&mut self, refs: &[PrimRef]) {
+        for r in refs {
+            let c = r.centroid();
+            let k: [i32; 4] = std::array::from_fn(|i| bin_of(c[i], self.min[i], self.scale[i]));
+            for axis in 0..3 {
+                let k = k[axis] as usize % BINS;
+                self.counts[axis][k] += 1;
+                self.boxes[axis][k].grow(r.lo, r.hi);
             }
         }
-        _ if n > MAX_LEAF => Some(median_split(ctx, indices, ext)),
-        _ => None,
+    }
+
+    fn merge(mut self, o: Bins) -> Bins {
+        for axis in 0..3 {
+            for k in 0..BINS {
+                self.counts[axis][k] += o.counts[axis][k];
+                self.boxes[axis][k] = self.boxes[axis][k].union(o.boxes[axis][k]);
+            }
+        }
+        self
+    }
+
+    /// The boxes of the primitives left and right of `plane`.
+    fn boxes_around(&self, plane: &Plane) -> (Box4, Box4) {
+        let boxes = &self.boxes[plane.axis];
+        let union = |s: &[Box4]| s.iter().fold(Box4::EMPTY, |a, b| a.union(*b));
+        (union(&boxes[..plane.bin]), union(&boxes[plane.bin..]))
     }
 }
 
@@ -163,108 +454,96 @@ fn split(
 struct Plane {
     axis: usize,
     bin: usize,
-    min: f32,
-    scale: f32,
     /// Unnormalised SAH cost `A_L N_L + A_R N_R`.
     cost: f32,
 }
 
-impl Plane {
-    fn is_left(&self, c: Vec3) -> bool {
-        bin_of(c[self.axis], self.min, self.scale) < self.bin
-    }
-}
-
-/// Bin index of a centroid coordinate (shared by binning and partitioning).
-#[inline]
-fn bin_of(c: f32, min: f32, scale: f32) -> usize {
-    // `as usize` saturates (NaN → 0), so no index is out of range.
-    (((c - min) * scale) as usize).min(BINS - 1)
+/// Bin index of a centroid coordinate (shared by binning and partitioning):
+/// `((c - min) * scale)` truncated into `0..BINS`, NaN → 0, as `as usize`
+/// then `min(BINS - 1)` would give; clamped as a float by compare-and-select.
+#[inline(always)]
+fn bin_of(c: f32, min: f32, scale: f32) -> i32 {
+    let x = (c - min) * scale;
+    let x = if x > 0.0 { x } else { 0.0 };
+    let x = if x < (BINS - 1) as f32 {
+        x
+    } else {
+        (BINS - 1) as f32
+    };
+    x as i32
 }
 
 /// Cheapest binned-SAH plane over the three axes, if any separates the centroids.
-fn best_sah_plane(ctx: &Ctx, indices: &[u32], centroid_bounds: Aabb) -> Option<Plane> {
-    let ext = centroid_bounds.extent();
-    let cmin = centroid_bounds.min;
-    let scale = Vec3::select(
-        ext.cmpgt(Vec3::ZERO),
-        Vec3::splat(BINS as f32) / ext,
-        Vec3::ZERO,
-    );
-    let mut counts = [[0u32; BINS]; 3];
-    let mut boxes = [[Aabb::EMPTY; BINS]; 3];
-    for &i in indices {
-        let c = ctx.centroids[i as usize];
-        let b = ctx.bounds[i as usize];
-        for axis in 0..3 {
-            let k = bin_of(c[axis], cmin[axis], scale[axis]);
-            counts[axis][k] += 1;
-            boxes[axis][k] = boxes[axis][k].union(b);
-        }
-    }
+fn best_sah_plane(bins: &Bins) -> Option<Plane> {
     let mut best: Option<Plane> = None;
     for axis in 0..3 {
-        if scale[axis] == 0.0 {
+        if bins.scale[axis] == 0.0 {
             continue;
         }
+        let (counts, boxes) = (&bins.counts[axis], &bins.boxes[axis]);
         // right_cost[k]: area * count of bins k.. (the right side of plane k).
         let mut right_cost = [0.0f32; BINS];
-        let mut acc_box = Aabb::EMPTY;
+        let mut acc_box = Box4::EMPTY;
         let mut acc_n = 0u32;
+        let mut right = f32::INFINITY; // empty right side: not a split
         for k in (1..BINS).rev() {
-            acc_box = acc_box.union(boxes[axis][k]);
-            acc_n += counts[axis][k];
-            right_cost[k] = if acc_n > 0 {
-                acc_box.surface_area() * acc_n as f32
-            } else {
-                f32::INFINITY // empty right side: not a split
-            };
+            // An empty bin changes neither the box nor the count: skip the area.
+            if counts[k] > 0 {
+                acc_box = acc_box.union(boxes[k]);
+                acc_n += counts[k];
+                right = acc_box.surface_area() * acc_n as f32;
+            }
+            right_cost[k] = right;
         }
-        let mut left_box = Aabb::EMPTY;
+        let mut left_box = Box4::EMPTY;
         let mut left_n = 0u32;
         for k in 1..BINS {
-            left_box = left_box.union(boxes[axis][k - 1]);
-            left_n += counts[axis][k - 1];
-            if left_n == 0 {
+            // Plane k costs the same as plane k - 1 when bin k - 1 is empty,
+            // and only a strictly cheaper plane replaces the best one.
+            if counts[k - 1] == 0 {
                 continue;
             }
+            left_box = left_box.union(boxes[k - 1]);
+            left_n += counts[k - 1];
             let cost = left_box.surface_area() * left_n as f32 + right_cost[k];
             if cost.is_finite() && best.as_ref().is_none_or(|b| cost < b.cost) {
-                best = Some(Plane {
-                    axis,
-                    bin: k,
-                    min: cmin[axis],
-                    scale: scale[axis],
-                    cost,
-                });
+                best = Some(Plane { axis, bin: k, cost });
             }
         }
     }
     best
 }
 
-/// Object median along the widest centroid axis.
-fn median_split(ctx: &Ctx, indices: &mut [u32], centroid_extent: Vec3) -> usize {
+/// Object median along the widest centroid axis; both halves' bounds.
+fn median_split(refs: &mut [PrimRef], centroid_extent: Vec3) -> (usize, NodeBounds, NodeBounds) {
     let axis = centroid_extent.max_position();
-    let mid = indices.len() / 2;
-    let c = &ctx.centroids;
-    indices.select_nth_unstable_by(mid, |&a, &b| {
-        c[a as usize][axis].total_cmp(&c[b as usize][axis])
+    let mid = refs.len() / 2;
+    refs.select_nth_unstable_by(mid, |a, b| {
+        a.centroid()[axis].total_cmp(&b.centroid()[axis])
     });
-    mid
+    let (left, right) = refs.split_at(mid);
+    (mid, NodeBounds::of(left), NodeBounds::of(right))
 }
 
-/// In-place partition; returns how many elements satisfy `left` (now at the front).
-fn partition(indices: &mut [u32], left: impl Fn(u32) -> bool) -> usize {
+/// In-place partition by `plane`; returns how many primitives go left (now at
+/// the front) and the centroid boxes of both sides. The swap order is fixed:
+/// it decides the primitive order in the leaves.
+fn partition(refs: &mut [PrimRef], bins: &Bins, plane: &Plane) -> (usize, Box4, Box4) {
+    let (axis, min, scale) = (plane.axis, bins.min[plane.axis], bins.scale[plane.axis]);
+    let mut left = Box4::EMPTY;
+    let mut right = Box4::EMPTY;
     let mut i = 0;
-    let mut j = indices.len();
+    let mut j = refs.len();
     while i < j {
-        if left(indices[i]) {
+        let c = refs[i].centroid();
+        if (bin_of(c[axis], min, scale) as usize) < plane.bin {
+            left.grow(c, c);
             i += 1;
         } else {
+            right.grow(c, c);
             j -= 1;
-            indices.swap(i, j);
+            refs.swap(i, j);
         }
     }
-    i
+    (i, left, right)
 }

@@ -373,6 +373,101 @@ mod tests {
         }
     }
 
+    /// FNV-1a over every node (a zero's sign ignored: no box test sees it)
+    /// and the primitive order.
+    fn tree_hash(b: &Bvh) -> u64 {
+        let mut h: u64 = 0xcbf2_9ce4_8422_2325;
+        let mut eat = |x: u32| {
+            for byte in x.to_le_bytes() {
+                h = (h ^ u64::from(byte)).wrapping_mul(0x0000_0100_0000_01b3);
+            }
+        };
+        for n in &b.nodes {
+            for v in n.min.iter().chain(&n.max) {
+                eat((v + 0.0).to_bits());
+            }
+            eat(n.offset);
+            eat(n.count);
+        }
+        for &p in &b.prim_indices {
+            eat(p);
+        }
+        h
+    }
+
+    #[test]
+    fn sah_tree_matches_reference_for_any_thread_count() {
+        // Hashes of the trees the first builder (index array, no PrimRefs)
+        // made: a faster builder must make the same splits, leaves and order.
+        // 70k primitives take the parallel binning path at the root.
+        let mut odd = random_tri_bounds(3000, 5);
+        for b in &mut odd[1000..1200] {
+            *b = Aabb::new(Vec3::ONE, Vec3::ONE); // coincident centroids
+        }
+        for b in &mut odd[2000..2100] {
+            b.max.z = b.min.z; // flat boxes
+        }
+        let cases = [
+            (random_tri_bounds(70_000, 7), 0xd61e_9f5d_99dd_fcca),
+            (odd, 0x4e5c_1f1a_c5f4_b8a4),
+            (random_tri_bounds(500, 3), 0xeb67_ac8b_459c_f213),
+        ];
+        for (bounds, want) in &cases {
+            for threads in [1, 2, 4] {
+                let b = rayon::ThreadPoolBuilder::new()
+                    .num_threads(threads)
+                    .build()
+                    .unwrap()
+                    .install(|| Bvh::build(bounds, SplitMethod::SahBinned));
+                assert_eq!(b.validate(bounds), Ok(()));
+                assert_eq!(
+                    tree_hash(&b),
+                    *want,
+                    "{} prims, {threads} threads",
+                    bounds.len()
+                );
+            }
+        }
+    }
+
+    #[test]
+    fn nan_coordinates_do_not_shrink_boxes() {
+        // A NaN coordinate is ignored wherever it comes in the order, so the
+        // finite boxes around it stay covered.
+        let mut bounds = random_tri_bounds(200, 8);
+        for i in (0..200).step_by(9) {
+            bounds[i].min.x = f32::NAN;
+            bounds[i + 1].max.y = f32::NAN;
+        }
+        for m in METHODS {
+            let b = Bvh::build(&bounds, m);
+            let mut seen = vec![0u32; bounds.len()];
+            for &p in &b.prim_indices {
+                seen[p as usize] += 1;
+            }
+            assert!(seen.iter().all(|&c| c == 1));
+            for leaf in b.nodes.iter().filter(|n| n.is_leaf()) {
+                let r = leaf.offset as usize..(leaf.offset + leaf.count) as usize;
+                for &p in &b.prim_indices[r] {
+                    let mut finite = bounds[p as usize];
+                    for k in 0..3 {
+                        if finite.min[k].is_nan() {
+                            finite.min[k] = finite.max[k];
+                        }
+                        if finite.max[k].is_nan() {
+                            finite.max[k] = finite.min[k];
+                        }
+                    }
+                    assert!(leaf.bounds().contains_box(&finite), "{m:?}: prim {p}");
+                }
+            }
+            assert!(
+                b.bounds()
+                    .contains_box(&Aabb::new(Vec3::splat(-4.9), Vec3::splat(4.9)))
+            );
+        }
+    }
+
     #[test]
     fn validate_reports_violations() {
         let bounds = random_tri_bounds(200, 4);
