@@ -239,9 +239,18 @@ def main():
             extra = f" (first warm-up render: {warmup[who]:.3f} s)" if who.startswith("llvm") else ""
         label = "glint (binary, whole run)" if who == "glint" else f"mitsuba {who}"
         lines.append(f"{label:27} {n} thread{'s' if n > 1 else ' '}: {fmt(times[(who, n)])}{extra}")
-    g2 = statistics.median(times[("glint", 2)])
+    # Ratios within a round cancel most of the load other processes put on a
+    # shared machine; the times alone do not.
     for v in variants:
-        lines.append(f"glint / mitsuba {v}, 2 threads (medians): {g2 / statistics.median(times[(v, 2)]):.2f}")
+        for n in threads:
+            ratios = [g / m for g, m in zip(times[("glint", n)], times[(v, n)])]
+            m, lo, hi = median_range(ratios)
+            lines.append(f"glint time / mitsuba {v} time, {n} thread{'s' if n > 1 else ' '}: {m:.2f} [{lo:.2f}-{hi:.2f}]")
+    for who in ["glint"] + variants:
+        ratios = [a / b for a, b in zip(times[(who, 1)], times[(who, 2)])]
+        m, lo, hi = median_range(ratios)
+        lines.append(f"scaling 1->2 threads, {who}: {m:.2f}x [{lo:.2f}-{hi:.2f}]")
+    lines.append(f"load average (1, 5, 15 min) at the end: {os.getloadavg()}")
 
     # Do the images look alike? Means, and the mean absolute difference once
     # the means are matched (the fall-off models differ, see the docstring).
