@@ -6,11 +6,13 @@
 //! rounds; then build times and glint's bytes per triangle.
 //!
 //! glint is the 4-wide BVH the render traverses; `glint-binary` is the binary
-//! tree it is collapsed from. Peers: `obvhs` (CWBVH, always), Embree 4 when `GLINT_EMBREE_LIB` names its
-//! library (see `glint_bench::embree`). tinybvh is not a row: `tinybvh-rs`
-//! compiles its C++ with `-march=native` and only exposes the BVH8_CPU
-//! traversal under `cfg(target_feature = "avx2")`, which needs the whole
-//! build under different RUSTFLAGS, and BVH8_CPU has no any-hit query there.
+//! tree it is collapsed from. Peers: `obvhs` (CWBVH, always); tinybvh's
+//! BVH8_CPU (`Intersect`, `IsOccluded`; AVX2 + FMA) when build.rs could
+//! compile it, see `glint_bench::tinybvh`; Embree 4 when `GLINT_EMBREE_LIB`
+//! names its library (see `glint_bench::embree`). Every peer calls its
+//! library once per ray. Build times are for one thread and for the global
+//! rayon pool (glint) or Embree's default thread count (Embree); obvhs and
+//! tinybvh build on one thread here.
 //!
 //! `GLINT_BENCH_ROUNDS` sets the number of rounds (default 7), and
 //! `GLINT_BENCH_RAYS` the rays per set (default 262144).
@@ -21,6 +23,7 @@ use std::time::{Duration, Instant};
 use glam::{Vec3, Vec3A};
 use glint::accel::{Aabb, Bvh, Ray, SplitMethod, WideBvh};
 use glint_bench::embree::{Embree, EmbreeScene};
+use glint_bench::tinybvh::TinyBvh8;
 use glint_bench::{
     View, assets_dir, displaced_torus, find_file, glint_closest, glint_occluded, incoherent_rays,
     load_model, primary_rays, shadow_rays,
@@ -50,6 +53,7 @@ enum Peer<'a> {
     GlintBinary(&'a Bvh, &'a [[Vec3; 3]]),
     Obvhs(&'a CwBvh, &'a [Triangle]),
     Embree(&'a EmbreeScene<'a>),
+    TinyBvh(&'a TinyBvh8),
 }
 
 impl Peer<'_> {
@@ -59,6 +63,7 @@ impl Peer<'_> {
             Peer::GlintBinary(..) => "glint-binary",
             Peer::Obvhs(..) => "obvhs",
             Peer::Embree(..) => "embree",
+            Peer::TinyBvh(..) => "tinybvh8",
         }
     }
 
@@ -108,6 +113,15 @@ impl Peer<'_> {
                     };
                 }
             }
+            Peer::TinyBvh(b) => {
+                for r in rays {
+                    hits += if shadow {
+                        b.occluded(r, 1.0) as u32
+                    } else {
+                        b.closest(r).is_some() as u32
+                    };
+                }
+            }
         }
         hits
     }
@@ -126,7 +140,8 @@ fn time_ms(rounds: usize, mut f: impl FnMut()) -> (f64, f64, f64) {
     (m, v[0], v[v.len() - 1])
 }
 
-fn bench_mesh(label: &str, tris: &[[Vec3; 3]], view: &View, embree: Option<&Embree>) {
+/// `embree`: a one-thread device and one with Embree's default threads.
+fn bench_mesh(label: &str, tris: &[[Vec3; 3]], view: &View, embree: Option<(&Embree, &Embree)>) {
     let rounds = env_usize("GLINT_BENCH_ROUNDS", 7).max(1);
     let n_rays = env_usize("GLINT_BENCH_RAYS", 1 << 18);
     let side = (n_rays as f64).sqrt() as usize;
@@ -145,61 +160,111 @@ fn bench_mesh(label: &str, tris: &[[Vec3; 3]], view: &View, embree: Option<&Embr
         })
         .collect();
 
-    // Build, one thread each.
+    // Build: one thread each, then all threads where the library can.
     let build_rounds = rounds.min(5);
-    let (g, glo, ghi) = time_ms(build_rounds, || {
+    let glint_build = || WideBvh::collapse(&Bvh::build(&bounds, SplitMethod::SahBinned), tris);
+    let ms = |t: (f64, f64, f64)| format!("{:8.1} [{:.1}-{:.1}]", t.0, t.1, t.2);
+    println!(
+        "build, ms median [min-max]: 1 thread | all {} threads",
+        rayon::current_num_threads()
+    );
+    let g1 = time_ms(build_rounds, || {
         black_box(one_thread.install(|| Bvh::build(&bounds, SplitMethod::SahBinned)));
     });
-    let (w, wlo, whi) = time_ms(build_rounds, || {
-        black_box(
-            one_thread
-                .install(|| WideBvh::collapse(&Bvh::build(&bounds, SplitMethod::SahBinned), tris)),
-        );
+    let gn = time_ms(build_rounds, || {
+        black_box(Bvh::build(&bounds, SplitMethod::SahBinned));
     });
-    let (o, olo, ohi) = time_ms(build_rounds, || {
+    println!("  glint SAH      {} | {}", ms(g1), ms(gn));
+    let w1 = time_ms(build_rounds, || {
+        black_box(one_thread.install(glint_build));
+    });
+    let wn = time_ms(build_rounds, || {
+        black_box(glint_build());
+    });
+    println!(
+        "  glint SAH+4    {} | {} (binary, then collapsed to 4-wide)",
+        ms(w1),
+        ms(wn)
+    );
+    let o1 = time_ms(build_rounds, || {
         black_box(build_cwbvh_from_tris(
             &otris,
             BvhBuildParams::medium_build(),
             &mut Duration::default(),
         ));
     });
-    println!("build (1 thread, ms, median [min-max]):");
-    println!("  glint SAH     {g:9.1} [{glo:.1}-{ghi:.1}]");
-    println!("  glint SAH+4   {w:9.1} [{wlo:.1}-{whi:.1}] (binary, then collapsed to 4-wide)");
-    println!("  obvhs medium  {o:9.1} [{olo:.1}-{ohi:.1}]");
-    if let Some(e) = embree {
-        let (m, lo, hi) = time_ms(build_rounds, || {
-            black_box(e.scene(tris).unwrap());
+    println!("  obvhs medium   {}", ms(o1));
+    let tiny = TinyBvh8::build(tris);
+    match &tiny {
+        Ok(_) => {
+            let t1 = time_ms(build_rounds, || {
+                black_box(TinyBvh8::build(tris).unwrap());
+            });
+            println!("  tinybvh8       {} (BVH8_CPU::Build)", ms(t1));
+        }
+        Err(e) => println!("  skipping tinybvh: {e}"),
+    }
+    if let Some((e1, en)) = embree {
+        let e1 = time_ms(build_rounds, || {
+            black_box(e1.scene(tris).unwrap());
         });
-        println!("  embree medium {m:9.1} [{lo:.1}-{hi:.1}]");
+        let en = time_ms(build_rounds, || {
+            black_box(en.scene(tris).unwrap());
+        });
+        println!("  embree medium  {} | {}", ms(e1), ms(en));
     }
 
     let bvh = Bvh::build(&bounds, SplitMethod::SahBinned);
     let wide = WideBvh::collapse(&bvh, tris);
     let per_tri = |bytes: usize| bytes as f64 / tris.len() as f64;
     let binary = size_of_val(bvh.nodes.as_slice()) + size_of_val(bvh.prim_indices.as_slice());
-    println!(
-        "glint memory, bytes/tri: binary {} nodes ({:.2}/tri) + indices {:.1}; \
-         4-wide {} nodes, depth {}, + leaf-order triangles + indices {:.1}; positions {:.1}",
-        bvh.nodes.len(),
-        bvh.nodes.len() as f64 / tris.len() as f64,
-        per_tri(binary),
-        wide.nodes.len(),
-        wide.depth,
-        per_tri(wide.bytes()),
-        per_tri(size_of_val(tris)),
-    );
     let cw = build_cwbvh_from_tris(
         &otris,
         BvhBuildParams::medium_build(),
         &mut Duration::default(),
     );
-    let escene = embree.map(|e| e.scene(tris).unwrap());
+    let embree_before = Embree::bytes_in_use();
+    let escene = embree.map(|(e, _)| e.scene(tris).unwrap());
+    let embree_bytes = Embree::bytes_in_use().saturating_sub(embree_before);
+    println!(
+        "memory, bytes/tri (positions alone {:.1}): glint 4-wide {:.1} \
+         ({} nodes, depth {}; nodes + leaf-order triangles + indices), \
+         glint binary {:.1} ({} nodes, {:.2}/tri; nodes + indices, positions apart)",
+        per_tri(size_of_val(tris)),
+        per_tri(wide.bytes()),
+        wide.nodes.len(),
+        wide.depth,
+        per_tri(binary),
+        bvh.nodes.len(),
+        bvh.nodes.len() as f64 / tris.len() as f64,
+    );
+    let mut peer_memory = format!(
+        "  obvhs {:.1} (nodes + indices; + its {}-byte triangles {:.1})",
+        per_tri(size_of_val(cw.nodes.as_slice()) + size_of_val(cw.primitive_indices.as_slice())),
+        size_of::<Triangle>(),
+        per_tri(size_of_val(otris.as_slice())),
+    );
+    if let Ok(t) = &tiny {
+        peer_memory += &format!(
+            ", tinybvh8 {:.1} (node + triangle blocks)",
+            per_tri(t.bytes())
+        );
+    }
+    if escene.is_some() {
+        peer_memory += &format!(
+            ", embree {:.1} (all it holds: BVH + vertex and index buffers)",
+            per_tri(embree_bytes)
+        );
+    }
+    println!("{peer_memory}");
     let mut peers = vec![
         Peer::Glint(&wide),
         Peer::GlintBinary(&bvh, tris),
         Peer::Obvhs(&cw, &otris),
     ];
+    if let Ok(t) = &tiny {
+        peers.push(Peer::TinyBvh(t));
+    }
     if let Some(s) = &escene {
         peers.push(Peer::Embree(s));
     }
@@ -245,17 +310,14 @@ fn main() {
     // `cargo bench` passes `--bench`; a name filter picks meshes by label.
     let filter: Option<String> = std::env::args().skip(1).find(|a| !a.starts_with('-'));
     let wanted = |label: &str| filter.as_deref().is_none_or(|f| label.contains(f));
-    let embree = match Embree::load("threads=1") {
+    let embree = match Embree::load("threads=1").and_then(|e1| Ok((e1, Embree::load("")?))) {
         Ok(e) => Some(e),
         Err(e) => {
             println!("skipping the Embree rows: {e}");
             None
         }
     };
-    println!(
-        "skipping the tinybvh rows: tinybvh-rs needs the whole build with target-feature=+avx2 (see anchors.rs)"
-    );
-    let embree = embree.as_ref();
+    let embree = embree.as_ref().map(|(e1, en)| (e1, en));
     if wanted("torus100k") {
         bench_mesh("torus100k", &displaced_torus(158), &View::torus(), embree);
     }

@@ -12,6 +12,7 @@
 
 use std::ffi::{CString, c_char, c_void};
 use std::ptr::null_mut;
+use std::sync::atomic::{AtomicIsize, Ordering};
 
 use glam::Vec3;
 use glint::accel::Ray;
@@ -80,6 +81,19 @@ struct Api {
     release_geometry: unsafe extern "C" fn(Handle),
     intersect1: unsafe extern "C" fn(Handle, *mut RtcRayHit, *mut c_void),
     occluded1: unsafe extern "C" fn(Handle, *mut RtcRay, *mut c_void),
+    set_memory_monitor: unsafe extern "C" fn(Handle, MemoryMonitor, *mut c_void),
+}
+
+/// `RTCMemoryMonitorFunction`: Embree reports every allocation (positive)
+/// and release (negative) of its device's memory.
+type MemoryMonitor = unsafe extern "C" fn(*mut c_void, isize, bool) -> bool;
+
+/// Bytes Embree's devices hold now, as their memory monitors report it.
+static BYTES_IN_USE: AtomicIsize = AtomicIsize::new(0);
+
+unsafe extern "C" fn count_bytes(_user: *mut c_void, bytes: isize, _post: bool) -> bool {
+    BYTES_IN_USE.fetch_add(bytes, Ordering::Relaxed);
+    true
 }
 
 /// A loaded Embree library and one device.
@@ -129,6 +143,7 @@ impl Embree {
             release_geometry: sym!("rtcReleaseGeometry"),
             intersect1: sym!("rtcIntersect1"),
             occluded1: sym!("rtcOccluded1"),
+            set_memory_monitor: sym!("rtcSetDeviceMemoryMonitorFunction"),
         };
         let config = CString::new(config).map_err(|e| e.to_string())?;
         // SAFETY: a NUL-terminated config string; the device is released in Drop.
@@ -136,11 +151,18 @@ impl Embree {
         if device.is_null() {
             return Err("rtcNewDevice failed".into());
         }
+        // SAFETY: a live device and a callback with Embree's signature.
+        unsafe { (api.set_memory_monitor)(device, count_bytes, null_mut()) };
         Ok(Embree {
             api,
             device,
             _lib: lib,
         })
+    }
+
+    /// Bytes all loaded Embree devices hold now (buffers, BVHs, scratch).
+    pub fn bytes_in_use() -> usize {
+        BYTES_IN_USE.load(Ordering::Relaxed).max(0) as usize
     }
 
     /// Builds a scene (Embree's default, medium quality) over `tris`.

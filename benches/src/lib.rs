@@ -1,7 +1,7 @@
 //! What glint's benchmarks share: procedural meshes, the rays traced against
 //! them (primary, incoherent, shadow), glint's queries on triangle soups, the
-//! real models of `../shared/assets`, and (in [`embree`]) Embree 4 loaded at
-//! run time.
+//! real models of `../shared/assets`, (in [`embree`]) Embree 4 loaded at run
+//! time, and (in [`tinybvh`]) tinybvh's BVH8_CPU compiled by build.rs.
 
 use std::path::{Path, PathBuf};
 
@@ -10,6 +10,7 @@ use glint::accel::{Bvh, Ray, RayShear, intersect_triangle_sheared};
 use glint::test_util::Lcg;
 
 pub mod embree;
+pub mod tinybvh;
 
 /// A lat-long sphere of `n × n` quads, displaced by a few sines and a little
 /// per-vertex noise, so that it has detail at several scales. Pole triangles
