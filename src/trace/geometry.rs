@@ -134,10 +134,7 @@ pub fn build_triangle_bvh(
     mut stats: ResMut<RenderStats>,
 ) {
     let g = &mut *geometry;
-    let mut uses: HashMap<*const MeshData, u32> = HashMap::new();
-    for (mesh, _, _) in &meshes {
-        *uses.entry(Arc::as_ptr(&mesh.data)).or_default() += 1;
-    }
+    let uses = mesh_uses(meshes.iter().map(|(m, _, _)| m));
     // Index in `instanced_meshes` of each shared mesh, in order of first use.
     let mut mesh_index: HashMap<*const MeshData, u32> = HashMap::new();
     let mut instances = Vec::new();
@@ -191,6 +188,15 @@ pub fn build_triangle_bvh(
     let stored: usize = bottom.iter().map(|b| b.prims.len()).sum();
     g.instanced = TwoLevelBvh::new(bottom, instances, split_method(&settings));
     stats.record(Stage::BuildTriangleBvh, (bounds.len() + stored) as u64);
+}
+
+/// How many entities use each mesh's data; a mesh used by two or more is instanced.
+pub fn mesh_uses<'a>(meshes: impl Iterator<Item = &'a Mesh>) -> HashMap<*const MeshData, u32> {
+    let mut uses = HashMap::new();
+    for mesh in meshes {
+        *uses.entry(Arc::as_ptr(&mesh.data)).or_default() += 1;
+    }
+    uses
 }
 
 /// The wide BVH of a mesh's triangles in its object space.
@@ -411,6 +417,32 @@ impl SceneGeometry {
             tint *= (1.0 - alpha) * (Vec3::ONE - (Vec3::ONE - kd) * alpha);
         }
         tint
+    }
+
+    /// Triangles drawn: the flattened ones and every instance's.
+    pub fn triangles_drawn(&self) -> u64 {
+        self.tri_positions.len() as u64 + self.instanced.triangles_drawn()
+    }
+
+    /// Triangles stored: the flattened ones and each instanced mesh's once.
+    pub fn triangles_stored(&self) -> u64 {
+        let instanced: usize = self.instanced.meshes.iter().map(|m| m.prims.len()).sum();
+        (self.tri_positions.len() + instanced) as u64
+    }
+
+    /// Bytes the render's triangle queries read: the wide BVH (nodes, triangle data,
+    /// indices) and the flattened positions, and for instanced meshes their BVHs, the
+    /// top level, the instances and the meshes' vertices and indices.
+    pub fn triangle_bytes(&self) -> usize {
+        let meshes: usize = self
+            .instanced_meshes
+            .iter()
+            .map(|m| size_of_val(m.vertices.as_slice()) + size_of_val(m.triangles.as_slice()))
+            .sum();
+        self.tri_wide.bytes()
+            + size_of_val(self.tri_positions.as_slice())
+            + self.instanced.bytes()
+            + meshes
     }
 
     /// The texture coordinates of triangle `prim` of the mesh of `instance`.
