@@ -36,8 +36,18 @@ pub fn describe(renderer: &mut Renderer) -> Result<String> {
     let _ = writeln!(
         o,
         "  meshes        {meshes} ({} triangles)",
-        geometry.tri_positions.len()
+        geometry.triangles_drawn()
     );
+    let instanced = &geometry.instanced;
+    if !instanced.is_empty() {
+        let _ = writeln!(
+            o,
+            "  instances     {} of {} shared meshes ({} triangles stored once each)",
+            instanced.instances.len(),
+            instanced.meshes.len(),
+            geometry.triangles_stored() - geometry.tri_positions.len() as u64
+        );
+    }
     let _ = writeln!(o, "  spheres       {spheres}");
     let _ = writeln!(o, "  materials     {materials}");
     let _ = writeln!(
@@ -57,6 +67,15 @@ pub fn describe(renderer: &mut Renderer) -> Result<String> {
             bvh.nodes.len(),
             bvh.leaf_count(),
             bvh.depth()
+        );
+    }
+    let stored = geometry.triangles_stored();
+    if stored > 0 {
+        let bytes = geometry.triangle_bytes();
+        let _ = writeln!(
+            o,
+            "  accel memory  {bytes} bytes, {:.1} per stored triangle (nodes, triangle data, indices, positions)",
+            bytes as f64 / stored as f64
         );
     }
     let _ = writeln!(

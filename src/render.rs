@@ -16,7 +16,8 @@ use crate::sampling::{pixel_mode, samples_per_pixel};
 use crate::scene::format::SceneFile;
 use crate::scene::model::{SceneFormat, spawn_model};
 use crate::scene::{
-    Camera, Mesh, PixelSampling, SamplerKind, SceneSource, Settings, read_scene, spawn_scene,
+    Camera, Mesh, MeshData, PixelSampling, SamplerKind, SceneSource, Settings, read_scene,
+    spawn_scene,
 };
 use crate::schedule::{PassControl, add_render_schedules, run_pass, run_passes, run_prepare};
 use crate::stats::RenderStats;
@@ -242,12 +243,16 @@ impl Renderer {
     /// Refuses a render whose film and prepared geometry would not fit in memory.
     fn ensure_memory(&mut self, camera: &Camera) -> Result<()> {
         let mut meshes = self.world.query::<&Mesh>();
-        let triangles: u64 = meshes
-            .iter(&self.world)
-            .map(|m| m.data.triangles.len() as u64)
-            .sum();
+        // A mesh shared by several entities is prepared once, plus an instance per use.
+        let mut uses: std::collections::HashMap<*const MeshData, (u64, u64)> = Default::default();
+        for m in meshes.iter(&self.world) {
+            let triangles = m.data.triangles.len() as u64;
+            uses.entry(Arc::as_ptr(&m.data)).or_insert((0, triangles)).0 += 1;
+        }
+        let triangles: u64 = uses.values().map(|&(_, t)| t).sum();
+        let instances: u64 = uses.values().map(|&(n, _)| n).filter(|&n| n >= 2).sum();
         let (w, h) = (camera.width as u64, camera.height as u64);
-        Ok(memory::ensure_fits(&[
+        let mut parts = vec![
             (
                 format!("a {w}x{h} film"),
                 memory::product(&[w, h, Film::BYTES_PER_PIXEL]),
@@ -256,7 +261,14 @@ impl Renderer {
                 format!("{triangles} triangles"),
                 memory::product(&[triangles, memory::BYTES_PER_PREPARED_TRIANGLE]),
             ),
-        ])?)
+        ];
+        if instances > 0 {
+            parts.push((
+                format!("{instances} instances"),
+                memory::product(&[instances, memory::BYTES_PER_INSTANCE]),
+            ));
+        }
+        Ok(memory::ensure_fits(&parts)?)
     }
 
     /// Starts over with `camera` and `settings`, for drivers that render one pass at a

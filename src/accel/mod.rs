@@ -10,12 +10,14 @@
 //! - [`bvh`] and [`build`]: a flat depth-first BVH with binned-SAH and median builders.
 //! - [`traverse`]: closest-hit and any-hit traversal of that BVH.
 //! - [`wide`]: that BVH collapsed to 4-wide nodes with triangles in leaf order, for the render.
+//! - [`instance`]: a two-level BVH, one wide BVH per mesh shared by its instances.
 
 use glam::Vec3;
 
 pub mod aabb;
 pub mod build;
 pub mod bvh;
+pub mod instance;
 pub mod sphere;
 pub mod traverse;
 pub mod triangle;
@@ -23,6 +25,7 @@ pub mod wide;
 
 pub use aabb::Aabb;
 pub use bvh::{Bvh, BvhNode, SplitMethod};
+pub use instance::{Instance, TwoLevelBvh};
 pub use sphere::intersect_sphere;
 pub use traverse::{TraversalStats, TraversalVisitor};
 pub use triangle::{RayShear, TriangleHit, intersect_triangle, intersect_triangle_sheared};

@@ -1,5 +1,10 @@
 //! The scene's geometry as the hot loops see it: world-space triangles and spheres in
 //! flat arrays, each kind under its own BVH, with closest-hit and visibility queries.
+//! Meshes that several entities share are not flattened: each is kept once in object
+//! space under a two-level BVH ([`TwoLevelBvh`]) and read through its instances.
+
+use std::collections::HashMap;
+use std::sync::Arc;
 
 use bevy_ecs::prelude::*;
 use glam::{Vec2, Vec3};
@@ -8,9 +13,10 @@ use super::materials::Materials;
 use crate::accel::sphere::{sphere_roots, sphere_uv};
 use crate::accel::triangle::{RayShear, TriangleHit, intersect_triangle_sheared};
 use crate::accel::{
-    Aabb, Bvh, Ray, SplitMethod, TraversalStats, TraversalVisitor, WideBvh, intersect_sphere,
+    Aabb, Bvh, Instance, Ray, SplitMethod, TraversalStats, TraversalVisitor, TwoLevelBvh, WideBvh,
+    gamma, intersect_sphere,
 };
-use crate::scene::{Acceleration, BvhSplit, Mesh, Settings, Sphere, Transform};
+use crate::scene::{Acceleration, BvhSplit, Mesh, MeshData, Settings, Sphere, Transform};
 use crate::stats::{RenderStats, Stage};
 
 /// Which kind of primitive a hit is on.
@@ -49,6 +55,25 @@ pub struct Hit {
     pub kind: PrimKind,
     /// Barycentric weights of the triangle's vertices (zero for spheres).
     pub bary: Vec3,
+    /// For a triangle of an instanced mesh, the instance (index into
+    /// `SceneGeometry::instanced.instances`); `prim` is then the mesh's own triangle index.
+    pub instance: Option<u32>,
+}
+
+/// A triangle as shading reads it, in world space.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct TriangleData {
+    /// Vertex positions.
+    pub positions: [Vec3; 3],
+    /// Vertex normals (unit).
+    pub normals: [Vec3; 3],
+    /// Vertex texture coordinates.
+    pub texcoords: [Vec2; 3],
+    /// Material index.
+    pub material: u32,
+    /// Bound on the rounding added by an instance's transform (zero when flattened):
+    /// its vertices mapped to world space, and a ray origin mapped back.
+    pub transform_error: Vec3,
 }
 
 /// World-space geometry in flat arrays, and one BVH per primitive kind.
@@ -73,6 +98,14 @@ pub struct SceneGeometry {
     pub sphere_material: Vec<u32>,
     /// Hierarchy over the spheres.
     pub sphere_bvh: Bvh,
+    /// Meshes used by two or more entities, once each in object space, and their
+    /// instances under a top-level BVH (empty when no mesh is shared).
+    pub instanced: TwoLevelBvh,
+    /// The vertices and triangles of each mesh in `instanced.meshes`: the scene's own,
+    /// shared, not copied.
+    pub instanced_meshes: Vec<Arc<MeshData>>,
+    /// Material index of each instance.
+    pub instance_material: Vec<u32>,
 }
 
 /// The one mapping from the scene's [`BvhSplit`] to accel's [`SplitMethod`]: scene sits
@@ -91,7 +124,8 @@ fn build(bounds: &[Aabb], s: &Settings) -> Bvh {
     }
 }
 
-/// Transforms every mesh to world space and builds the triangle BVH.
+/// Transforms every mesh used once to world space and builds the triangle BVH; meshes
+/// used by two or more entities get one object-space BVH each, shared by their instances.
 pub fn build_triangle_bvh(
     settings: Res<Settings>,
     meshes: Query<(&Mesh, &Transform, &crate::scene::MaterialRef)>,
@@ -100,10 +134,31 @@ pub fn build_triangle_bvh(
     mut stats: ResMut<RenderStats>,
 ) {
     let g = &mut *geometry;
+    let uses = mesh_uses(meshes.iter().map(|(m, _, _)| m));
+    // Index in `instanced_meshes` of each shared mesh, in order of first use.
+    let mut mesh_index: HashMap<*const MeshData, u32> = HashMap::new();
+    let mut instances = Vec::new();
     for (mesh, transform, material) in &meshes {
         let m = transform.world_from_object;
-        let normal_from_object = m.matrix3.inverse().transpose();
         let material = materials.index_of.get(&material.0).copied().unwrap_or(0);
+        let key = Arc::as_ptr(&mesh.data);
+        if uses[&key] >= 2 {
+            let next = mesh_index.len() as u32;
+            let index = *mesh_index.entry(key).or_insert(next);
+            // A map without an inverse (zero scale) leaves its instance flattened.
+            if let Some(instance) = Instance::new(m, index) {
+                if index == next {
+                    g.instanced_meshes.push(mesh.data.clone());
+                }
+                instances.push(instance);
+                g.instance_material.push(material);
+                continue;
+            }
+            if index == next {
+                mesh_index.remove(&key);
+            }
+        }
+        let normal_from_object = m.matrix3.inverse().transpose();
         let v = &mesh.data.vertices;
         for t in &mesh.data.triangles {
             let [a, b, c] = t.map(|i| &v[i as usize]);
@@ -125,7 +180,35 @@ pub fn build_triangle_bvh(
         .collect();
     g.tri_bvh = build(&bounds, &settings);
     g.collapse_triangle_bvh();
-    stats.record(Stage::BuildTriangleBvh, bounds.len() as u64);
+    let bottom: Vec<WideBvh> = g
+        .instanced_meshes
+        .iter()
+        .map(|data| object_bvh(data, &settings))
+        .collect();
+    let stored: usize = bottom.iter().map(|b| b.prims.len()).sum();
+    g.instanced = TwoLevelBvh::new(bottom, instances, split_method(&settings));
+    stats.record(Stage::BuildTriangleBvh, (bounds.len() + stored) as u64);
+}
+
+/// How many entities use each mesh's data; a mesh used by two or more is instanced.
+pub fn mesh_uses<'a>(meshes: impl Iterator<Item = &'a Mesh>) -> HashMap<*const MeshData, u32> {
+    let mut uses = HashMap::new();
+    for mesh in meshes {
+        *uses.entry(Arc::as_ptr(&mesh.data)).or_default() += 1;
+    }
+    uses
+}
+
+/// The wide BVH of a mesh's triangles in its object space.
+fn object_bvh(data: &MeshData, settings: &Settings) -> WideBvh {
+    let v = &data.vertices;
+    let positions: Vec<[Vec3; 3]> = data
+        .triangles
+        .iter()
+        .map(|t| t.map(|i| v[i as usize].position))
+        .collect();
+    let bounds: Vec<Aabb> = positions.iter().map(|p| Aabb::from_points(p)).collect();
+    WideBvh::collapse(&build(&bounds, settings), &positions)
 }
 
 /// Gathers the spheres and builds their BVH.
@@ -200,6 +283,17 @@ impl SceneGeometry {
                 best = Some(triangle_hit(prim, &h));
             }
         }
+        // After the flattened triangles and strictly closer: of hits at the same t,
+        // flattened triangles win over instances.
+        if !self.instanced.is_empty()
+            && let Some((instance, prim, h)) = self.instanced.closest_hit(ray, t_max)
+        {
+            t_max = h.t;
+            best = Some(Hit {
+                instance: Some(instance),
+                ..triangle_hit(prim, &h)
+            });
+        }
         if !self.sphere_bvh.nodes.is_empty() {
             visitor.begin_hierarchy(PrimKind::Sphere);
             let found = self.sphere_bvh.closest_hit(ray, t_max, visitor, |p, tm| {
@@ -212,6 +306,7 @@ impl SceneGeometry {
                     prim,
                     kind: PrimKind::Sphere,
                     bary: Vec3::ZERO,
+                    instance: None,
                 });
             }
         }
@@ -232,11 +327,12 @@ impl SceneGeometry {
                 })
             }
         };
-        tris || (!self.sphere_bvh.nodes.is_empty()
-            && self.sphere_bvh.any_hit(ray, t_max, visitor, |p| {
-                let s = &self.spheres[p as usize];
-                intersect_sphere(ray, s.center, s.radius, t_max).is_some()
-            }))
+        tris || (!self.instanced.is_empty() && self.instanced.any_hit(ray, t_max, |_, _, _| true))
+            || (!self.sphere_bvh.nodes.is_empty()
+                && self.sphere_bvh.any_hit(ray, t_max, visitor, |p| {
+                    let s = &self.spheres[p as usize];
+                    intersect_sphere(ray, s.center, s.radius, t_max).is_some()
+                }))
     }
 
     /// Light transmitted along the ray through (0, t_max): the product over every surface
@@ -253,27 +349,33 @@ impl SceneGeometry {
         // (t, material, uv) of every transparent surface crossed; opaque ones stop the walk.
         let mut crossings = Crossings::default();
         let opaque = |material: u32| materials.list[material as usize].alpha >= 1.0;
-        let mut cross = |p: u32, h: &TriangleHit| {
-            let material = self.tri_material[p as usize];
+        let mut cross = |material: u32, texcoords: &dyn Fn() -> [Vec2; 3], h: &TriangleHit| {
             if opaque(material) {
                 return true;
             }
-            let [ta, tb, tc] = self.tri_texcoords[p as usize];
+            let [ta, tb, tc] = texcoords();
             crossings.push((h.t, material, h.b0 * ta + h.b1 * tb + h.b2 * tc));
             false
         };
+        let flat = |p: u32| self.tri_texcoords[p as usize];
         let blocked = if self.use_wide::<V>() {
-            self.tri_wide.any_hit(ray, t_max, cross)
+            self.tri_wide.any_hit(ray, t_max, |p, h| {
+                cross(self.tri_material[p as usize], &|| flat(p), h)
+            })
         } else {
             !self.tri_bvh.nodes.is_empty() && {
                 let shear = RayShear::new(ray);
                 self.tri_bvh.any_hit(ray, t_max, visitor, |p| {
                     let [a, b, c] = self.tri_positions[p as usize];
                     intersect_triangle_sheared(&shear, ray.origin, a, b, c, t_max)
-                        .is_some_and(|h| cross(p, &h))
+                        .is_some_and(|h| cross(self.tri_material[p as usize], &|| flat(p), &h))
                 })
             }
-        };
+        } || (!self.instanced.is_empty()
+            && self.instanced.any_hit(ray, t_max, |i, p, h| {
+                let material = self.instance_material[i as usize];
+                cross(material, &|| self.instanced_texcoords(i, p), h)
+            }));
         if blocked {
             return Vec3::ZERO;
         }
@@ -317,9 +419,88 @@ impl SceneGeometry {
         tint
     }
 
+    /// Triangles drawn: the flattened ones and every instance's.
+    pub fn triangles_drawn(&self) -> u64 {
+        self.tri_positions.len() as u64 + self.instanced.triangles_drawn()
+    }
+
+    /// Triangles stored: the flattened ones and each instanced mesh's once.
+    pub fn triangles_stored(&self) -> u64 {
+        let instanced: usize = self.instanced.meshes.iter().map(|m| m.prims.len()).sum();
+        (self.tri_positions.len() + instanced) as u64
+    }
+
+    /// Bytes the render's triangle queries read: the wide BVH (nodes, triangle data,
+    /// indices) and the flattened positions, and for instanced meshes their BVHs, the
+    /// top level, the instances and the meshes' vertices and indices.
+    pub fn triangle_bytes(&self) -> usize {
+        let meshes: usize = self
+            .instanced_meshes
+            .iter()
+            .map(|m| size_of_val(m.vertices.as_slice()) + size_of_val(m.triangles.as_slice()))
+            .sum();
+        self.tri_wide.bytes()
+            + size_of_val(self.tri_positions.as_slice())
+            + self.instanced.bytes()
+            + meshes
+    }
+
+    /// The texture coordinates of triangle `prim` of the mesh of `instance`.
+    fn instanced_texcoords(&self, instance: u32, prim: u32) -> [Vec2; 3] {
+        let mesh =
+            &self.instanced_meshes[self.instanced.instances[instance as usize].mesh as usize];
+        mesh.triangles[prim as usize].map(|k| mesh.vertices[k as usize].texcoord)
+    }
+
+    /// The hit triangle of `hit` (a triangle hit) in world space.
+    pub fn triangle(&self, hit: &Hit) -> TriangleData {
+        let i = hit.prim as usize;
+        let Some(instance) = hit.instance else {
+            return TriangleData {
+                positions: self.tri_positions[i],
+                normals: self.tri_normals[i],
+                texcoords: self.tri_texcoords[i],
+                material: self.tri_material[i],
+                transform_error: Vec3::ZERO,
+            };
+        };
+        let inst = &self.instanced.instances[instance as usize];
+        let mesh = &self.instanced_meshes[inst.mesh as usize];
+        let vertices = mesh.triangles[i].map(|k| &mesh.vertices[k as usize]);
+        // The same arithmetic as flattening in `build_triangle_bvh`.
+        let m = &inst.world_from_object;
+        let normal_from_object = inst.object_from_world.matrix3.transpose();
+        let positions = vertices.map(|v| m.transform_point3(v.position));
+        // Vertices mapped to world space round by gamma(3) of |M||v| + |T|; a ray origin
+        // mapped back to object space by gamma(3) of |M^-1||p| + |T^-1|, which is |M|
+        // times that in world space. gamma(4) covers the products of the two.
+        let (ma, ia) = (m.matrix3.abs(), inst.object_from_world.matrix3.abs());
+        let (mt, it) = (
+            Vec3::from(m.translation).abs(),
+            Vec3::from(inst.object_from_world.translation).abs(),
+        );
+        let object = vertices
+            .iter()
+            .fold(Vec3::ZERO, |a, v| a.max(v.position.abs()));
+        let world = positions.iter().fold(Vec3::ZERO, |a, p| a.max(p.abs()));
+        let transform_error = gamma(4) * (ma * object + mt + ma * (ia * world + it));
+        TriangleData {
+            positions,
+            normals: vertices.map(|v| {
+                (normal_from_object * glam::Vec3A::from(v.normal))
+                    .try_normalize()
+                    .map_or(Vec3::Z, Vec3::from)
+            }),
+            texcoords: vertices.map(|v| v.texcoord),
+            material: self.instance_material[instance as usize],
+            transform_error,
+        }
+    }
+
     /// Bounds of all geometry (empty when there is none).
     pub fn bounds(&self) -> Aabb {
         let mut b = Aabb::EMPTY;
+        b = b.union(self.instanced.bounds());
         if !self.tri_bvh.nodes.is_empty() {
             b = b.union(self.tri_bvh.bounds());
         }
@@ -372,5 +553,6 @@ fn triangle_hit(prim: u32, h: &TriangleHit) -> Hit {
         prim,
         kind: PrimKind::Triangle,
         bary: Vec3::new(h.b0, h.b1, h.b2),
+        instance: None,
     }
 }

@@ -74,6 +74,10 @@ pub fn analyse_scene(
 ) {
     let s = &*settings;
     let triangles: usize = meshes.iter().map(|m| m.data.triangles.len()).sum();
+    let shared: Vec<u32> = super::geometry::mesh_uses(meshes.iter())
+        .into_values()
+        .filter(|&n| n >= 2)
+        .collect();
     let lights = lights.iter().len();
     let area_lights = area_lights.iter().len();
     let textured = materials.iter().filter(|m| m.kd_texture.is_some()).count();
@@ -91,7 +95,15 @@ pub fn analyse_scene(
     p.triangle_bvh = p.decide(
         "build_triangle_bvh",
         triangles > 0,
-        &format!("{triangles} triangles go into {bvh}"),
+        &if shared.is_empty() {
+            format!("{triangles} triangles go into {bvh}")
+        } else {
+            format!(
+                "{triangles} triangles go into {bvh}; {} meshes used {} times are instanced (two-level BVH)",
+                shared.len(),
+                shared.iter().sum::<u32>()
+            )
+        },
         "no meshes in the scene",
     );
     p.sphere_bvh = p.decide(

@@ -43,23 +43,24 @@ pub fn surface_at(
 ) -> Surface {
     let (p, p_error, ng, n, uv, material) = match hit.kind {
         PrimKind::Triangle => {
-            let i = hit.prim as usize;
-            let [p0, p1, p2] = geometry.tri_positions[i];
+            let tri = geometry.triangle(hit);
+            let [p0, p1, p2] = tri.positions;
             let b = hit.bary;
             let p = b.x * p0 + b.y * p1 + b.z * p2;
-            let p_error = gamma(7) * ((b.x * p0).abs() + (b.y * p1).abs() + (b.z * p2).abs());
+            let p_error = gamma(7) * ((b.x * p0).abs() + (b.y * p1).abs() + (b.z * p2).abs())
+                + tri.transform_error;
             let ng = (p1 - p0).cross(p2 - p0).normalize_or(Vec3::Z);
             let n = if interpolate_normals {
-                let [n0, n1, n2] = geometry.tri_normals[i];
+                let [n0, n1, n2] = tri.normals;
                 // Clamp so rounding just outside the triangle cannot flip the blend.
                 let w = b.max(Vec3::ZERO);
                 (w.x * n0 + w.y * n1 + w.z * n2).normalize_or(ng)
             } else {
                 ng
             };
-            let [t0, t1, t2] = geometry.tri_texcoords[i];
+            let [t0, t1, t2] = tri.texcoords;
             let uv = b.x * t0 + b.y * t1 + b.z * t2;
-            (p, p_error, ng, n, uv, geometry.tri_material[i])
+            (p, p_error, ng, n, uv, tri.material)
         }
         PrimKind::Sphere => {
             let s = &geometry.spheres[hit.prim as usize];

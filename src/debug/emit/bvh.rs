@@ -37,6 +37,7 @@ pub fn emit_bvh(mut spawner: Spawner, log: Res<DebugTrace>, geometry: Res<SceneG
         let b = node.bounds();
         let holds_hit = hit.is_some_and(|h| {
             h.kind == v.kind
+                && h.instance.is_none()
                 && node.is_leaf()
                 && bvh.prim_indices[node.offset as usize..(node.offset + node.count) as usize]
                     .contains(&h.prim)
@@ -87,7 +88,7 @@ pub fn emit_bvh(mut spawner: Spawner, log: Res<DebugTrace>, geometry: Res<SceneG
     }
     if let Some((h, s)) = &r.hit {
         if h.kind == PrimKind::Triangle {
-            let [a, b, c] = geometry.tri_positions[h.prim as usize];
+            let [a, b, c] = geometry.triangle(h).positions;
             for (p, q) in [(a, b), (b, c), (c, a)] {
                 out.push(prim(
                     Feature::Bvh,

@@ -45,6 +45,9 @@ struct Importer<'a> {
     meshes: HashMap<(usize, usize, bool), Arc<MeshData>>,
     /// Object-space bounds per cached mesh.
     mesh_bounds: HashMap<(usize, usize, bool), (Vec3, Vec3)>,
+    /// Every distinct geometry read, by a hash of its contents: primitives of different
+    /// meshes that read the same accessors (the same sphere in 98 materials) share one.
+    by_content: HashMap<u64, Vec<Arc<MeshData>>>,
     /// Material entity per glTF material index (`None` = the glTF default material).
     materials: HashMap<Option<usize>, Entity>,
     /// Decoded base-colour textures per (image, kd scale bits).
@@ -146,6 +149,7 @@ fn import_gltf_unguarded(
         options,
         meshes: HashMap::new(),
         mesh_bounds: HashMap::new(),
+        by_content: HashMap::new(),
         materials: HashMap::new(),
         textures: HashMap::new(),
         warned_modes: Vec::new(),
@@ -282,7 +286,8 @@ impl<'a> Importer<'a> {
             let data = match self.meshes.get(&key) {
                 Some(d) => d.clone(),
                 None => {
-                    let d = Arc::new(self.read_primitive(mesh, &primitive, mirrored, warnings)?);
+                    let data = self.read_primitive(mesh, &primitive, mirrored, warnings)?;
+                    let d = self.share(data);
                     self.mesh_bounds.insert(key, mesh_bounds(&d));
                     self.meshes.insert(key, d.clone());
                     d
@@ -308,6 +313,26 @@ impl<'a> Importer<'a> {
             ));
         }
         Ok(())
+    }
+
+    /// The geometry already read with the same contents as `data`, else `data`.
+    fn share(&mut self, data: MeshData) -> Arc<MeshData> {
+        let mut h = std::hash::DefaultHasher::new();
+        for v in &data.vertices {
+            let bits = [v.position, v.normal].map(|p| p.to_array().map(f32::to_bits));
+            std::hash::Hash::hash(&(bits, v.texcoord.to_array().map(f32::to_bits)), &mut h);
+        }
+        std::hash::Hash::hash(&data.triangles, &mut h);
+        let same = self
+            .by_content
+            .entry(std::hash::Hasher::finish(&h))
+            .or_default();
+        if let Some(d) = same.iter().find(|d| ***d == data) {
+            return d.clone();
+        }
+        let d = Arc::new(data);
+        same.push(d.clone());
+        d
     }
 
     fn read_primitive(
