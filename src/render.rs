@@ -5,6 +5,7 @@ use std::sync::Arc;
 use std::sync::atomic::{AtomicBool, Ordering};
 use std::time::{Duration, Instant};
 
+use bevy_ecs::name::Name;
 use bevy_ecs::prelude::*;
 
 use crate::error::{GlintError, Result};
@@ -13,11 +14,13 @@ use crate::film::estimate::{ErrorEstimate, EstimateMethod};
 use crate::film::part::{Crop, Part, PartInfo, crop_film};
 use crate::memory;
 use crate::sampling::{pixel_mode, samples_per_pixel};
-use crate::scene::format::SceneFile;
-use crate::scene::model::{SceneFormat, spawn_model};
+use crate::scene::format::{
+    CameraDesc, EntityDesc, GeometryDesc, MeshDesc, PointLightDesc, SceneFile, TransformDesc,
+};
+use crate::scene::model::{DEFAULT_LIGHT_NAME, SceneFormat, spawn_model};
 use crate::scene::{
-    Camera, Mesh, MeshData, PixelSampling, SamplerKind, SceneSource, Settings, read_scene,
-    spawn_scene,
+    Camera, Mesh, MeshData, PixelSampling, PointLight, SamplerKind, SceneSource, Settings,
+    read_scene, spawn_scene,
 };
 use crate::schedule::{PassControl, add_render_schedules, run_pass, run_passes, run_prepare};
 use crate::stats::RenderStats;
@@ -178,6 +181,49 @@ impl Renderer {
         let mut world = World::new();
         spawn_model(&mut world, path, overrides)?;
         Ok(Self::from_world(world))
+    }
+
+    /// A model file (glTF, OBJ) as a scene of one mesh entity with the camera and the
+    /// default light that [`Renderer::from_model`] chooses written out, for drivers that
+    /// work on a [`SceneFile`] (the debug, the viewer); also that renderer, unprepared,
+    /// whose notes say what was chosen.
+    pub fn model_scene(path: &Path, overrides: &Overrides) -> Result<(SceneFile, Self)> {
+        let mut renderer = Self::from_model(path, overrides)?;
+        let camera = renderer.camera().ok_or(GlintError::NoCamera)?;
+        let absolute = std::fs::canonicalize(path)
+            .unwrap_or_else(|_| path.to_owned())
+            .to_string_lossy()
+            .into_owned();
+        let geometry = match SceneFormat::of(path) {
+            SceneFormat::Obj => GeometryDesc::Obj { path: absolute },
+            _ => GeometryDesc::Gltf {
+                path: absolute,
+                scene: None,
+            },
+        };
+        let mut entities = vec![EntityDesc::Mesh(MeshDesc {
+            name: None,
+            geometry,
+            material: None,
+            transform: TransformDesc::default(),
+        })];
+        let mut lights = renderer.world.query::<(&Name, &PointLight)>();
+        for (name, light) in lights.iter(&renderer.world) {
+            if name.as_str() == DEFAULT_LIGHT_NAME {
+                entities.push(EntityDesc::PointLight(PointLightDesc {
+                    name: Some(DEFAULT_LIGHT_NAME.into()),
+                    position: light.position,
+                    color: light.color,
+                }));
+            }
+        }
+        let file = SceneFile {
+            camera: CameraDesc::from(&camera),
+            settings: renderer.settings().clone(),
+            materials: Default::default(),
+            entities,
+        };
+        Ok((file, renderer))
     }
 
     /// Builds the world from a parsed scene; `path` resolves relative paths.

@@ -363,3 +363,49 @@ fn unsupported_required_extension_is_one_clear_error() {
     assert!(err.contains("EXT_meshopt_compression"), "{err}");
     assert_eq!(err.lines().count(), 1);
 }
+
+/// A model written out as a scene (what `glint debug` and the viewer take for a model)
+/// renders exactly as the model does directly, automatic camera and default light
+/// included; and `glint debug` explains a model's pixel.
+#[test]
+fn model_as_scene_renders_as_the_model() {
+    let dir = temp_dir();
+    let obj = dir.path().join("tri.obj");
+    std::fs::write(&obj, "v -1 -1 0\nv 1 -1 0\nv 0 1 0\nf 1 2 3\n").unwrap();
+    for path in [fixture_dir().join("glint_fixture.gltf"), obj] {
+        let mut direct = Renderer::from_model(&path, &small()).unwrap();
+        direct.render(None, &mut |_| {}).unwrap();
+        let (file, _) = Renderer::model_scene(&path, &small()).unwrap();
+        let mut scene = Renderer::from_scene(&file, &path).unwrap();
+        scene.render(None, &mut |_| {}).unwrap();
+        let bits = |r: &Renderer| -> Vec<[u32; 3]> {
+            r.film()
+                .image()
+                .iter()
+                .map(|p| p.to_array().map(f32::to_bits))
+                .collect()
+        };
+        assert!(bits(&direct) == bits(&scene), "{}", path.display());
+
+        let options = glint::debug::DebugOptions {
+            pixel: [16, 16],
+            output: dir.path().join("debug.png"),
+            features: None,
+            view_from: None,
+            view_size: [64, 48],
+            depth_test: false,
+            bvh_level: None,
+            dump: None,
+        };
+        let outcome = glint::debug::run(&path, &small(), &options).unwrap();
+        let centre = direct.film().pixel(16, 16);
+        assert!(outcome.entities > 0, "{}", path.display());
+        assert!(centre.max_element() > 0.0, "{}", path.display());
+        assert!(
+            outcome.pixel_color.abs_diff_eq(centre, 1e-6),
+            "{}: debug {} vs render {centre}",
+            path.display(),
+            outcome.pixel_color
+        );
+    }
+}

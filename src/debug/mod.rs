@@ -40,6 +40,7 @@ use crate::error::{GlintError, Result};
 use crate::film::{Encoding, write_image};
 use crate::render::{Overrides, Renderer};
 use crate::scene::format::SceneFile;
+use crate::scene::model::SceneFormat;
 use crate::scene::{Acceleration, Settings, read_scene};
 use crate::schedule::run_passes;
 use crate::trace::geometry::SceneGeometry;
@@ -395,8 +396,14 @@ pub fn run(scene: &Path, overrides: &Overrides, options: &DebugOptions) -> Resul
             message: "the debug image must be a .png".into(),
         });
     }
-    let mut file = read_scene(scene)?;
-    overrides.apply(&mut file)?;
+    let file = match SceneFormat::of(scene) {
+        SceneFormat::Ron => {
+            let mut file = read_scene(scene)?;
+            overrides.apply(&mut file)?;
+            file
+        }
+        SceneFormat::Gltf | SceneFormat::Obj => Renderer::model_scene(scene, overrides)?.0,
+    };
     let request = DebugRequest {
         pixel: options.pixel,
         features: match &options.features {

@@ -86,6 +86,9 @@ pub fn framing_camera(centre: Vec3, radius: f32, width: u32, height: u32) -> Cam
     }
 }
 
+/// The name of the point light added to a model that has none.
+pub const DEFAULT_LIGHT_NAME: &str = "default light";
+
 /// Spawns a model file as a whole scene: the file's first perspective camera or an
 /// automatic one framing the bounds, the file's lights or one default point light; the
 /// choices are recorded as notes in [`SceneSource`] for the summary line.
@@ -150,7 +153,7 @@ pub fn spawn_model(world: &mut World, path: &Path, overrides: &Overrides) -> Res
             return Err(too_large_to_frame(path, &report, "a default light"));
         }
         world.spawn((
-            Name::new("default light"),
+            Name::new(DEFAULT_LIGHT_NAME),
             PointLight {
                 position,
                 color: Vec3::ONE,

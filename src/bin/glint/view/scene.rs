@@ -3,14 +3,11 @@
 
 use std::path::{Path, PathBuf};
 
-use bevy_ecs::name::Name;
 use glam::Vec3;
 use glint::Renderer;
-use glint::scene::format::{
-    CameraDesc, EntityDesc, GeometryDesc, MeshDesc, PointLightDesc, SceneFile, TransformDesc,
-};
+use glint::scene::format::{CameraDesc, EntityDesc, GeometryDesc, MeshDesc, SceneFile};
 use glint::scene::model::SceneFormat;
-use glint::scene::{Camera, PointLight, Settings, read_scene};
+use glint::scene::{Camera, Settings, read_scene};
 use glint::trace::geometry::SceneGeometry;
 
 /// A scene as the viewer holds it: every render and debug trace starts from `file`.
@@ -43,52 +40,27 @@ impl ViewScene {
                 notes: Vec::new(),
             });
         }
-        let mut renderer = Renderer::from_file(path, overrides)?;
+        let (mut file, mut renderer) = Renderer::model_scene(path, overrides)?;
         renderer.prepare()?;
-        let mut camera = renderer.camera().ok_or(glint::GlintError::NoCamera)?;
         let mut notes = renderer.summary(0, Default::default()).notes;
-        // Inside an interior, the default light goes inside too, under the roof.
-        let mut inside_light = None;
+        // Inside an interior, the camera and the default light go inside, under the roof.
         if notes.iter().any(|n| n.starts_with("camera: automatic")) {
             let b = renderer.world.resource::<SceneGeometry>().bounds();
-            if let Some(inside) = interior_camera(b.min, b.max, &camera) {
-                camera = inside;
+            if let Some(inside) = interior_camera(
+                b.min,
+                b.max,
+                &renderer.camera().ok_or(glint::GlintError::NoCamera)?,
+            ) {
+                file.camera = CameraDesc::from(&inside);
                 let c = 0.5 * (b.min + b.max);
-                inside_light = Some(Vec3::new(c.x, b.min.y + 0.8 * (b.max.y - b.min.y), c.z));
+                for e in &mut file.entities {
+                    if let EntityDesc::PointLight(light) = e {
+                        light.position = Vec3::new(c.x, b.min.y + 0.8 * (b.max.y - b.min.y), c.z);
+                    }
+                }
                 notes.push("viewer: an interior, entered; its default light is inside".into());
             }
         }
-        let mut entities = vec![EntityDesc::Mesh(MeshDesc {
-            name: None,
-            geometry: match SceneFormat::of(path) {
-                SceneFormat::Obj => GeometryDesc::Obj {
-                    path: absolute(path),
-                },
-                _ => GeometryDesc::Gltf {
-                    path: absolute(path),
-                    scene: None,
-                },
-            },
-            material: None,
-            transform: TransformDesc::default(),
-        })];
-        // The default light glint adds to a model without lights, made explicit.
-        let mut q = renderer.world.query::<(&Name, &PointLight)>();
-        for (name, light) in q.iter(&renderer.world) {
-            if name.as_str() == "default light" {
-                entities.push(EntityDesc::PointLight(PointLightDesc {
-                    name: Some("default light".into()),
-                    position: inside_light.unwrap_or(light.position),
-                    color: light.color,
-                }));
-            }
-        }
-        let file = SceneFile {
-            camera: CameraDesc::from(&camera),
-            settings: renderer.settings().clone(),
-            materials: Default::default(),
-            entities,
-        };
         Ok(Self {
             file,
             path: path.to_owned(),
@@ -178,13 +150,6 @@ pub fn interior_camera(min: Vec3, max: Vec3, camera: &Camera) -> Option<Camera> 
         fov_y_degrees: 60.0,
         ..camera.clone()
     })
-}
-
-fn absolute(path: &Path) -> String {
-    std::fs::canonicalize(path)
-        .unwrap_or_else(|_| path.to_owned())
-        .to_string_lossy()
-        .into_owned()
 }
 
 fn quote(s: &str) -> String {
