@@ -85,62 +85,47 @@ impl Sampler {
     /// samples of one shading point are stratified. Sobol': point `index * n + k` of the
     /// slot's sequence, so they are stratified across passes too.
     pub fn light1(&self, pixel: u32, sample: u32, slot: LightSlot, k: u32, n: u32) -> f32 {
-        let (depth, path, light) = slot;
-        let dim = light_dim(depth, path, light, k);
-        match self.kind {
-            SamplerKind::Independent => self.get1(pixel, sample, dim),
-            _ => {
-                let (index, seed) = self.light_point(pixel, sample, slot, k, n);
-                sobol_1d(index, seed)
-            }
-        }
+        self.at(pixel, sample).light1(slot, k, n)
     }
 
     /// Sample `k` of `n` on a light, 2D; see [`Sampler::light1`].
     pub fn light2(&self, pixel: u32, sample: u32, slot: LightSlot, k: u32, n: u32) -> Vec2 {
-        let (depth, path, light) = slot;
-        let dim = light_dim(depth, path, light, k);
-        match self.kind {
-            SamplerKind::Independent => self.get2(pixel, sample, dim),
-            _ => {
-                let (index, seed) = self.light_point(pixel, sample, slot, k, n);
-                Vec2::from(sobol_2d(index, seed))
-            }
+        self.at(pixel, sample).light2(slot, k, n)
+    }
+
+    /// The light samples of camera sample `sample` in `pixel`: what every light sample
+    /// of its shading points shares is hashed here, once.
+    pub fn at(&self, pixel: u32, sample: u32) -> PointSampler {
+        // The low-discrepancy kinds key their scramble by the Sobol' replica, not the
+        // sample (see `light_point`); independent numbers by the sample.
+        let extra = match self.kind {
+            SamplerKind::Sobol => Self::sobol_replica(sample).0,
+            SamplerKind::Independent | SamplerKind::Stratified => sample,
+        };
+        PointSampler {
+            kind: self.kind,
+            sample,
+            prefix: self.prefix(pixel, extra),
         }
     }
 
-    /// Point index and scramble seed of light sample `k` of `n` (low-discrepancy kinds).
-    fn light_point(&self, pixel: u32, sample: u32, slot: LightSlot, k: u32, n: u32) -> (u32, u32) {
-        let (depth, path, light) = slot;
-        let dim = light_dim(depth, path, light, 0);
-        match self.kind {
-            SamplerKind::Sobol => {
-                let (replica, index) = Self::sobol_replica(sample);
-                (
-                    index.wrapping_mul(n).wrapping_add(k),
-                    self.pattern_seed(pixel, dim, replica),
-                )
-            }
-            _ => (k, self.pattern_seed(pixel, dim, sample)),
-        }
-    }
-
-    /// The 64-bit hash of (seed, pixel, sample, dim).
-    fn hash(&self, pixel: u32, sample: u32, dim: u32) -> u64 {
+    /// The running hash after (seed, pixel, sample): `hash` without the dimension.
+    fn prefix(&self, pixel: u32, sample: u32) -> u64 {
         // Chain the mixer over the inputs: each step is a bijection of the
         // running state xor-ed with the next input, so nearby counters give
         // unrelated outputs and no input is lost.
         let h = mix64(self.seed);
-        let h = mix64(h ^ ((u64::from(pixel) << 32) | u64::from(sample)));
-        mix64(h ^ u64::from(dim))
+        mix64(h ^ ((u64::from(pixel) << 32) | u64::from(sample)))
+    }
+
+    /// The 64-bit hash of (seed, pixel, sample, dim).
+    fn hash(&self, pixel: u32, sample: u32, dim: u32) -> u64 {
+        mix64(self.prefix(pixel, sample) ^ u64::from(dim))
     }
 
     /// A number in [0, 1).
     pub fn get1(&self, pixel: u32, sample: u32, dim: u32) -> f32 {
-        // 24 bits fill an f32 mantissa exactly: the result is a multiple of
-        // 2^-24 and at most 1 - 2^-24, never 1.0.
-        let bits = (self.hash(pixel, sample, dim) >> 40) as u32;
-        (bits as f32 * (1.0 / 16_777_216.0)).min(BELOW_ONE)
+        unit_from_hash(self.hash(pixel, sample, dim))
     }
 
     /// Two numbers in [0,1)^2 (dimensions dim and dim+1).
@@ -149,6 +134,76 @@ impl Sampler {
             self.get1(pixel, sample, dim),
             self.get1(pixel, sample, dim.wrapping_add(1)),
         )
+    }
+}
+
+/// A number in [0, 1) from a 64-bit hash.
+fn unit_from_hash(h: u64) -> f32 {
+    // 24 bits fill an f32 mantissa exactly: the result is a multiple of
+    // 2^-24 and at most 1 - 2^-24, never 1.0.
+    let bits = (h >> 40) as u32;
+    (bits as f32 * (1.0 / 16_777_216.0)).min(BELOW_ONE)
+}
+
+/// The light samples of one camera sample ([`Sampler::at`]): the same numbers as
+/// [`Sampler::light1`] and [`Sampler::light2`], with (seed, pixel, sample) hashed once.
+#[derive(Clone, Copy, Debug)]
+pub struct PointSampler {
+    kind: SamplerKind,
+    sample: u32,
+    /// `Sampler::prefix` of (pixel, sample), or of (pixel, replica) for Sobol'.
+    prefix: u64,
+}
+
+impl PointSampler {
+    /// Sample `k` of `n` on a light, 1D; see [`Sampler::light1`].
+    #[inline]
+    pub fn light1(&self, slot: LightSlot, k: u32, n: u32) -> f32 {
+        let (depth, path, light) = slot;
+        match self.kind {
+            SamplerKind::Independent => self.get1(light_dim(depth, path, light, k)),
+            _ => {
+                let (index, seed) = self.light_point(slot, k, n);
+                sobol_1d(index, seed)
+            }
+        }
+    }
+
+    /// Sample `k` of `n` on a light, 2D; see [`Sampler::light1`].
+    #[inline]
+    pub fn light2(&self, slot: LightSlot, k: u32, n: u32) -> Vec2 {
+        let (depth, path, light) = slot;
+        match self.kind {
+            SamplerKind::Independent => {
+                let dim = light_dim(depth, path, light, k);
+                Vec2::new(self.get1(dim), self.get1(dim.wrapping_add(1)))
+            }
+            _ => {
+                let (index, seed) = self.light_point(slot, k, n);
+                Vec2::from(sobol_2d(index, seed))
+            }
+        }
+    }
+
+    /// [`Sampler::get1`] of this pixel and sample.
+    fn get1(&self, dim: u32) -> f32 {
+        unit_from_hash(mix64(self.prefix ^ u64::from(dim)))
+    }
+
+    /// Point index and scramble seed of light sample `k` of `n` (low-discrepancy kinds):
+    /// `Sampler::pattern_seed` of the slot's first dimension.
+    fn light_point(&self, slot: LightSlot, k: u32, n: u32) -> (u32, u32) {
+        let (depth, path, light) = slot;
+        let dim = light_dim(depth, path, light, 0);
+        let h = mix64(self.prefix ^ u64::from(dim));
+        let seed = (h >> 32) as u32 ^ h as u32;
+        match self.kind {
+            SamplerKind::Sobol => {
+                let (_, index) = Sampler::sobol_replica(self.sample);
+                (index.wrapping_mul(n).wrapping_add(k), seed)
+            }
+            _ => (k, seed),
+        }
     }
 }
 
@@ -312,6 +367,44 @@ mod tests {
             s.get2(3, 2, light_dim(1, 0, 5, 7))
         );
         assert_eq!(s.pixel2(3, 2), s.get2(3, 2, DIM_PIXEL));
+    }
+
+    #[test]
+    fn point_sampler_gives_the_per_call_numbers() {
+        // The numbers as derived before the per-point hash was hoisted: every kind, every
+        // input from scratch through `get1`, `get2` and `pattern_seed`.
+        for kind in [
+            SamplerKind::Independent,
+            SamplerKind::Stratified,
+            SamplerKind::Sobol,
+        ] {
+            let s = Sampler::with_kind(9, kind);
+            for (pixel, sample) in [(0, 0), (5, 1), (4000, 6), (77, 13)] {
+                let point = s.at(pixel, sample);
+                for (slot, k, n) in [((0, 0, 0), 0, 1), ((1, 2, 3), 3, 4), ((2, 5, 600), 7, 9)] {
+                    let (depth, path, light) = slot;
+                    let (u, uv) = match kind {
+                        SamplerKind::Independent => {
+                            let dim = light_dim(depth, path, light, k);
+                            (s.get1(pixel, sample, dim), s.get2(pixel, sample, dim))
+                        }
+                        _ => {
+                            let (replica, index) = Sampler::sobol_replica(sample);
+                            let (extra, index) = match kind {
+                                SamplerKind::Sobol => (replica, index * n + k),
+                                _ => (sample, k),
+                            };
+                            let dim = light_dim(depth, path, light, 0);
+                            let seed = s.pattern_seed(pixel, dim, extra);
+                            (sobol_1d(index, seed), Vec2::from(sobol_2d(index, seed)))
+                        }
+                    };
+                    assert_eq!(point.light1(slot, k, n).to_bits(), u.to_bits(), "{kind:?}");
+                    assert_eq!(point.light2(slot, k, n), uv, "{kind:?}");
+                    assert_eq!(s.light2(pixel, sample, slot, k, n), uv, "{kind:?}");
+                }
+            }
+        }
     }
 
     #[test]

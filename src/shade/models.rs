@@ -85,6 +85,21 @@ fn specular_power(x: f32, shininess: f32) -> f32 {
     base.powf(exponent)
 }
 
+/// The highlight `light * ks * specular_power(cos, shininess)`, `cos` asked for only when
+/// it can matter.
+///
+/// `specular_power` is always in [0, 1] (never -0), and a signed zero times such a
+/// number is that same signed zero: so when `light * ks` is all zeros (`ks = 0`, most
+/// materials) it is the exact result, bit for bit, and the `powf` is skipped.
+fn specular(i: &ShadingInput, cos: impl FnOnce() -> f32) -> Vec3 {
+    let lk = i.light_color * i.ks;
+    if lk == Vec3::ZERO {
+        lk
+    } else {
+        lk * specular_power(cos(), i.shininess)
+    }
+}
+
 /// The diffuse term `light * kd * max(n.l, 0)` with `kd` given.
 fn diffuse(i: &ShadingInput, kd: Vec3) -> Vec3 {
     let cos_theta = i.n.dot(i.l).max(0.0);
@@ -98,7 +113,7 @@ fn phong_raw(i: &ShadingInput) -> Vec3 {
     }
     // reflect(-l, n) = -l - 2 (-l.n) n = 2 (n.l) n - l.
     let r = 2.0 * i.n.dot(i.l) * i.n - i.l;
-    diffuse(i, i.kd) + i.light_color * i.ks * specular_power(r.dot(i.v), i.shininess)
+    diffuse(i, i.kd) + specular(i, || r.dot(i.v))
 }
 
 /// Blinn-Phong before the NaN guard.
@@ -106,9 +121,12 @@ fn blinn_phong_raw(i: &ShadingInput) -> Vec3 {
     if !lit(i) {
         return Vec3::ZERO;
     }
-    // l = -v has no half vector; normalize_or_zero gives n.h = 0 there.
-    let h = (i.l + i.v).normalize_or_zero();
-    diffuse(i, i.kd) + i.light_color * i.ks * specular_power(i.n.dot(h), i.shininess)
+    diffuse(i, i.kd)
+        + specular(i, || {
+            // l = -v has no half vector; normalize_or_zero gives n.h = 0 there.
+            let h = (i.l + i.v).normalize_or_zero();
+            i.n.dot(h)
+        })
 }
 
 /// Lambertian: `light * kd * max(n.l, 0)`.
@@ -380,6 +398,59 @@ mod tests {
         let t = (r_dot_v - n_dot_h) * 3f32.sqrt();
         let out = linear_gradient_comparison(&i, &c);
         assert!(close(out, Vec3::new(0.0, 0.0, t)), "{out} vs {t}");
+    }
+
+    #[test]
+    fn zero_ks_skips_the_power_bit_for_bit() {
+        // The formulas as written before the `ks = 0` shortcut, every bit compared:
+        // signed zeros, negative and infinite lights, NaN and infinite shininess.
+        let reference_phong = |i: &ShadingInput| {
+            let r = 2.0 * i.n.dot(i.l) * i.n - i.l;
+            diffuse(i, i.kd) + i.light_color * i.ks * specular_power(r.dot(i.v), i.shininess)
+        };
+        let reference_blinn = |i: &ShadingInput| {
+            let h = (i.l + i.v).normalize_or_zero();
+            diffuse(i, i.kd) + i.light_color * i.ks * specular_power(i.n.dot(h), i.shininess)
+        };
+        let bits = |c: Vec3| c.to_array().map(f32::to_bits);
+        let lights = [
+            Vec3::new(2.0, 1.0, 0.5),
+            Vec3::new(-1.0, 0.0, -0.0),
+            Vec3::new(f32::INFINITY, 1.0, -0.0),
+        ];
+        let kss = [
+            Vec3::ZERO,
+            Vec3::new(-0.0, 0.0, -0.0),
+            Vec3::new(0.0, 0.3, 0.0),
+            Vec3::new(0.2, 0.4, 0.6),
+        ];
+        let kds = [Vec3::new(0.5, 0.25, 1.0), Vec3::new(-0.0, 0.0, 0.0)];
+        for light_color in lights {
+            for ks in kss {
+                for kd in kds {
+                    for shininess in [8.0, 0.0, f32::NAN, f32::INFINITY] {
+                        for (l, v) in [
+                            (at_angle(30.0), at_angle(-30.0)),
+                            (at_angle(10.0), at_angle(70.0)),
+                        ] {
+                            let i = ShadingInput {
+                                light_color,
+                                ks,
+                                kd,
+                                shininess,
+                                ..input(l, v)
+                            };
+                            assert_eq!(bits(phong_raw(&i)), bits(reference_phong(&i)), "{i:?}");
+                            assert_eq!(
+                                bits(blinn_phong_raw(&i)),
+                                bits(reference_blinn(&i)),
+                                "{i:?}"
+                            );
+                        }
+                    }
+                }
+            }
+        }
     }
 
     #[test]

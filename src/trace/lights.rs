@@ -51,6 +51,7 @@ impl Lights {
         mut f: impl FnMut(LightSample),
     ) {
         let (pixel, sample, depth, path) = key;
+        let point = sampler.at(pixel, sample);
         let mut light = 0u32;
         for p in &self.points {
             f(LightSample {
@@ -64,7 +65,7 @@ impl Lights {
         let inv = 1.0 / n as f32;
         for s in &self.segments {
             for k in 0..n {
-                let u = sampler.light1(pixel, sample, (depth, path, light), k, n);
+                let u = point.light1((depth, path, light), k, n);
                 let (position, color) = sample_segment_light(s, u);
                 f(LightSample {
                     position,
@@ -76,7 +77,7 @@ impl Lights {
         }
         for q in &self.parallelograms {
             for k in 0..n {
-                let uv = sampler.light2(pixel, sample, (depth, path, light), k, n);
+                let uv = point.light2((depth, path, light), k, n);
                 let (position, color) = sample_parallelogram_light(q, uv);
                 f(LightSample {
                     position,

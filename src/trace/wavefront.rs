@@ -15,7 +15,7 @@ use super::lights::{LightSample, Lights};
 use super::log::{HitObserver, LightObserver, RayTrace, TraceLog};
 use super::materials::Materials;
 use super::plan::RenderPlan;
-use super::surface::{SHADOW_EPSILON, Surface, surface_at};
+use super::surface::{SHADOW_EPSILON, Surface, offset_ray_origin, surface_at};
 use crate::accel::Ray;
 use crate::sampling::{Sampler, pixel_mode, pixel_sample_offset, samples_taken};
 use crate::scene::{Camera, PixelSampling, Settings};
@@ -293,6 +293,29 @@ struct ShadeContext<'a> {
     queue_shadows: bool,
 }
 
+/// Where one shading point's shadow rays start: [`Surface::shadow_ray_to`]'s origin, the
+/// same for every light sample, so it is offset once per point, not once per sample.
+struct ShadowOrigin(Vec3);
+
+impl ShadowOrigin {
+    fn of(surface: &Surface) -> Self {
+        Self(offset_ray_origin(
+            surface.p,
+            surface.p_error,
+            surface.ng,
+            surface.ng,
+        ))
+    }
+
+    /// `surface.shadow_ray_to(target)`, bit for bit.
+    fn ray_to(&self, target: Vec3) -> Ray {
+        Ray {
+            origin: self.0,
+            dir: target - self.0,
+        }
+    }
+}
+
 /// Direct light at ray `i`'s hit (or the background on a miss); its shadow rays are
 /// appended to `shadows`. `seen(sample, contribution, index in shadows)` observes every
 /// light sample (a no-op in a render, the trace log in a debug run).
@@ -313,6 +336,7 @@ fn shade_ray(
     let kd = cx.materials.kd_at(surface.material, surface.uv);
     let v = -q.ray.dir.normalize();
     let mut direct = Vec3::ZERO;
+    let mut origin = None;
     let key = (
         cx.region.first_pixel + q.slot,
         cx.region.sample,
@@ -339,8 +363,9 @@ fn shade_ray(
             }
             if cx.queue_shadows {
                 seen(ls, c, Some(shadows.len() as u32));
+                let origin = origin.get_or_insert_with(|| ShadowOrigin::of(surface));
                 shadows.push(ShadowRay {
-                    ray: surface.shadow_ray_to(ls.position),
+                    ray: origin.ray_to(ls.position),
                     contribution: c,
                     owner: i as u32,
                 });
@@ -549,4 +574,39 @@ pub fn advance_depth(mut wf: ResMut<Wavefront>) {
 /// Whether rays remain to be traced.
 pub fn rays_pending(wf: &Wavefront) -> bool {
     !wf.rays.is_empty()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn shadow_origin_gives_the_surfaces_shadow_rays() {
+        let bits = |r: Ray| [r.origin.to_array(), r.dir.to_array()].map(|v| v.map(f32::to_bits));
+        for (p, p_error, ng) in [
+            (Vec3::new(0.3, 2.0, -1.0), Vec3::splat(1e-7), Vec3::Y),
+            (
+                Vec3::new(-1e4, 0.0, 5.5),
+                Vec3::new(1e-3, 0.0, 2e-6),
+                Vec3::new(0.6, -0.8, 0.0),
+            ),
+            (Vec3::ZERO, Vec3::ZERO, Vec3::new(0.0, 0.0, -1.0)),
+        ] {
+            let surface = Surface {
+                p,
+                p_error,
+                ng,
+                n: ng,
+                uv: Vec2::ZERO,
+                material: 0,
+            };
+            let origin = ShadowOrigin::of(&surface);
+            for target in [Vec3::new(0.0, 1.99, 0.1), Vec3::new(-3.0, -7.0, 2.0), p] {
+                assert_eq!(
+                    bits(origin.ray_to(target)),
+                    bits(surface.shadow_ray_to(target))
+                );
+            }
+        }
+    }
 }
