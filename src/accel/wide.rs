@@ -12,6 +12,7 @@
 //! closest hit is the binary tree's, up to which of two triangles at exactly the
 //! same t is met first.
 
+use arrayvec::ArrayVec;
 use glam::Vec3;
 
 use super::bvh::{Bvh, MAX_DEPTH};
@@ -83,15 +84,13 @@ pub struct WideBvh {
     pub depth: u32,
 }
 
-/// Traversal stack entries on the call stack: enough for a tree of depth 21, as
-/// each level pushes at most three children. It is filled once per ray, so it is
-/// kept small; deeper trees take a heap stack (3 × `MAX_DEPTH` + 1 at most).
-const STACK_SIZE: usize = 64;
+/// Traversal stack entries any tree needs: each of at most `MAX_DEPTH` levels below
+/// the root pushes at most `WIDTH - 1` children, plus the root.
+const STACK_SIZE: usize = (WIDTH - 1) * MAX_DEPTH as usize + 1;
 
-/// Stack entries a tree of `depth` levels below the root needs.
-fn stack_size(depth: u32) -> usize {
-    (WIDTH - 1) * depth as usize + 1
-}
+/// The traversal stack: on the call stack and never initialised (an `ArrayVec`
+/// writes only what is pushed), so its size costs nothing per ray.
+type Stack = ArrayVec<(u32, f32), STACK_SIZE>;
 
 /// The per-ray constants of the wide slab test.
 struct RayBoxes {
@@ -188,33 +187,10 @@ impl WideBvh {
         {
             return false;
         }
-        let need = stack_size(self.depth);
-        let mut small = [(0, 0.0); STACK_SIZE];
-        let mut large = Vec::new();
-        // One call site, so that the traversal and the leaf test inline into it once.
-        let stack: &mut [(u32, f32)] = if need <= STACK_SIZE {
-            &mut small
-        } else {
-            large.resize(need, (0, 0.0));
-            &mut large
-        };
-        self.traverse_with(stack, ray, t_max, &mut leaf)
-    }
-
-    /// [`Self::traverse`] with the stack given (root at entry 0).
-    #[inline(always)]
-    fn traverse_with(
-        &self,
-        stack: &mut [(u32, f32)],
-        ray: &Ray,
-        t_max: &mut f32,
-        leaf: &mut impl FnMut(usize, usize, &mut f32) -> bool,
-    ) -> bool {
+        let mut stack = Stack::new();
+        stack.push((0, 0.0));
         let boxes = RayBoxes::new(ray);
-        let mut sp = 1;
-        while sp > 0 {
-            sp -= 1;
-            let (index, t_entry) = stack[sp];
+        while let Some((index, t_entry)) = stack.pop() {
             // A box pushed earlier may now lie beyond the closest hit found since.
             if t_entry > *t_max {
                 continue;
@@ -239,8 +215,7 @@ impl WideBvh {
             for &lane in &order[..n] {
                 let (child, count) = (node.child[lane], node.count[lane]);
                 if count == 0 {
-                    stack[sp] = (child, t[lane]);
-                    sp += 1;
+                    stack.push((child, t[lane]));
                 }
             }
             // Leaves nearest first, after the interior children are queued.

@@ -145,10 +145,10 @@ fn rays_along_the_grid_edges_never_slip_through() {
 }
 
 #[test]
-fn deep_trees_take_a_heap_stack_and_still_match() {
+fn deep_trees_still_match() {
     // A binary chain (leaf k beside the subtree of leaves k+1..), as a builder could
     // make at its depth limit: the wide tree takes three of its levels per level,
-    // which is still deeper than the stack on the call stack holds.
+    // which is still far deeper than a balanced tree of any size.
     let n = 72;
     let tris: Vec<Tri> = (0..n)
         .map(|k| {
@@ -171,7 +171,7 @@ fn deep_trees_take_a_heap_stack_and_still_match() {
     };
     let wide = WideBvh::collapse(&bvh, &tris);
     wide.validate(&tris).unwrap();
-    assert!(stack_size(wide.depth) > STACK_SIZE, "depth {}", wide.depth);
+    assert!(wide.depth >= 20, "depth {}", wide.depth);
     let brute = |ray: &Ray, t_max: f32| {
         let s = RayShear::new(ray);
         let mut best: Option<(u32, f32)> = None;
