@@ -14,6 +14,7 @@
 
 use arrayvec::ArrayVec;
 use glam::Vec3;
+use multiversion::multiversion;
 
 use super::bvh::{Bvh, MAX_DEPTH};
 use super::triangle::{RayShear, TriangleHit, intersect_triangle_sheared};
@@ -233,6 +234,12 @@ impl WideBvh {
     /// triangles hit at exactly the same t (where two meet), the lowest index wins,
     /// whatever order the traversal meets them in.
     pub fn closest_hit(&self, ray: &Ray, t_max: f32) -> Option<(u32, TriangleHit)> {
+        closest_hit_dispatched(self, ray, t_max)
+    }
+
+    /// [`Self::closest_hit`] compiled for whatever target features the caller has.
+    #[inline(always)]
+    fn closest_hit_inlined(&self, ray: &Ray, t_max: f32) -> Option<(u32, TriangleHit)> {
         let shear = RayShear::new(ray);
         let mut best: Option<(u32, TriangleHit)> = None;
         let mut t_max = t_max;
@@ -262,6 +269,17 @@ impl WideBvh {
     /// Visits triangles the ray meets in (0, t_max), in no particular order, until
     /// `visit(prim, hit)` returns true (stop); returns whether it stopped.
     pub fn any_hit(
+        &self,
+        ray: &Ray,
+        t_max: f32,
+        visit: impl FnMut(u32, &TriangleHit) -> bool,
+    ) -> bool {
+        any_hit_dispatched(self, ray, t_max, visit)
+    }
+
+    /// [`Self::any_hit`] compiled for whatever target features the caller has.
+    #[inline(always)]
+    fn any_hit_inlined(
         &self,
         ray: &Ray,
         t_max: f32,
@@ -370,6 +388,28 @@ impl WideBvh {
         }
         Ok(())
     }
+}
+
+// Runtime dispatch: one clone of each query per instruction set, the traversal and
+// triangle tests (`#[inline(always)]`) compiled inside each, picked once per process
+// from the CPU's features; no `-C target-cpu` needed. Rust never contracts a * b + c
+// into an FMA by itself, so every clone computes bit-identical results.
+
+/// [`WideBvh::closest_hit`] for the best instruction set the CPU has.
+#[multiversion(targets("x86_64+avx2+fma", "x86_64+sse4.2"))]
+fn closest_hit_dispatched(wide: &WideBvh, ray: &Ray, t_max: f32) -> Option<(u32, TriangleHit)> {
+    wide.closest_hit_inlined(ray, t_max)
+}
+
+/// [`WideBvh::any_hit`] for the best instruction set the CPU has.
+#[multiversion(targets("x86_64+avx2+fma", "x86_64+sse4.2"))]
+fn any_hit_dispatched<F: FnMut(u32, &TriangleHit) -> bool>(
+    wide: &WideBvh,
+    ray: &Ray,
+    t_max: f32,
+    visit: F,
+) -> bool {
+    wide.any_hit_inlined(ray, t_max, visit)
 }
 
 /// Appends the wide node for binary node `b` (and its subtree) at `depth`; returns its
