@@ -26,7 +26,7 @@ pub const WIDTH: usize = 4;
 /// `child` of an unused slot.
 const EMPTY: u32 = u32::MAX;
 
-/// A node of up to four children; box planes are SoA: `bounds[axis][lane]` for the
+/// A node of up to `WIDTH` children; box planes are SoA: `bounds[axis][lane]` for the
 /// minimum corner (axis 0..3) and `bounds[3 + axis][lane]` for the maximum.
 #[derive(Clone, Copy, Debug, PartialEq)]
 #[repr(C, align(64))]
@@ -70,7 +70,7 @@ impl WideNode {
     }
 }
 
-/// A 4-wide BVH with its triangles in leaf order; root at node 0.
+/// A `WIDTH`-wide BVH with its triangles in leaf order; root at node 0.
 #[derive(Clone, Debug, Default)]
 pub struct WideBvh {
     /// Nodes, each after its parent; empty for no triangles.
@@ -92,6 +92,10 @@ const STACK_SIZE: usize = (WIDTH - 1) * MAX_DEPTH as usize + 1;
 /// The traversal stack: on the call stack and never initialised (an `ArrayVec`
 /// writes only what is pushed), so its size costs nothing per ray.
 type Stack = ArrayVec<(u32, f32), STACK_SIZE>;
+
+/// Ize's enlargement of a box's exit distance, so that rounding never culls a box the
+/// exact ray meets.
+const BOX_MARGIN: f32 = 1.0 + 2.0 * gamma(3);
 
 /// The per-ray constants of the wide slab test.
 struct RayBoxes {
@@ -121,7 +125,6 @@ impl RayBoxes {
     fn test(&self, node: &WideNode, t_max: f32) -> [f32; WIDTH] {
         let b = &node.bounds;
         let (o, inv) = (self.origin, self.inv_dir);
-        let scale = 1.0 + 2.0 * gamma(3);
         let mut out = [f32::INFINITY; WIDTH];
         for (lane, out) in out.iter_mut().enumerate() {
             let near_x = (b[self.near[0]][lane] - o[0]) * inv[0];
@@ -131,7 +134,7 @@ impl RayBoxes {
             let far_y = (b[self.far[1]][lane] - o[1]) * inv[1];
             let far_z = (b[self.far[2]][lane] - o[2]) * inv[2];
             let t_near = 0.0f32.max(near_x).max(near_y).max(near_z);
-            let t_far = t_max.min(far_x).min(far_y).min(far_z) * scale;
+            let t_far = t_max.min(far_x).min(far_y).min(far_z) * BOX_MARGIN;
             *out = if t_near <= t_far {
                 t_near
             } else {
@@ -143,7 +146,7 @@ impl RayBoxes {
 }
 
 impl WideBvh {
-    /// Collapses `bvh` (built over `positions`) into 4-wide nodes, each taking the
+    /// Collapses `bvh` (built over `positions`) into `WIDTH`-wide nodes, each taking the
     /// largest-area interior grandchildren in place of their parents; leaves and
     /// their triangle order are the binary tree's.
     pub fn collapse(bvh: &Bvh, positions: &[[Vec3; 3]]) -> WideBvh {
@@ -192,8 +195,10 @@ impl WideBvh {
         stack.push((0, 0.0));
         let boxes = RayBoxes::new(ray);
         while let Some((index, t_entry)) = stack.pop() {
-            // A box pushed earlier may now lie beyond the closest hit found since.
-            if t_entry > *t_max {
+            // A box pushed earlier may now lie beyond the closest hit found since. With
+            // the slab test's margin: a box entry rounded just past a hit on its face must
+            // not hide a tie there, or the hit found would depend on the visiting order.
+            if t_entry > *t_max * BOX_MARGIN {
                 continue;
             }
             let node = &self.nodes[index as usize];
@@ -222,7 +227,10 @@ impl WideBvh {
             // Leaves nearest first, after the interior children are queued.
             for &lane in order[..n].iter().rev() {
                 let (child, count) = (node.child[lane], node.count[lane]);
-                if count > 0 && t[lane] <= *t_max && leaf(child as usize, count as usize, t_max) {
+                if count > 0
+                    && t[lane] <= *t_max * BOX_MARGIN
+                    && leaf(child as usize, count as usize, t_max)
+                {
                     return true;
                 }
             }
@@ -242,21 +250,26 @@ impl WideBvh {
     fn closest_hit_inlined(&self, ray: &Ray, t_max: f32) -> Option<(u32, TriangleHit)> {
         let shear = RayShear::new(ray);
         let mut best: Option<(u32, TriangleHit)> = None;
+        let limit = t_max;
         let mut t_max = t_max;
         self.traverse(ray, &mut t_max, |first, count, t_max| {
             for k in first..first + count {
                 let [a, b, c] = self.tris[k];
-                // Up to and including the best t so far, for the tie-break.
+                // Past the best t so far by more than the rounding of the triangle test's
+                // scaled early-out (t_scaled against bound * det, three roundings): then
+                // every triangle with t at or below the best passes it whatever the order
+                // of the leaves, and the comparison below alone decides, so the hit is
+                // the least (t, index) of the triangles hit before `limit`.
                 let bound = if best.is_some() {
-                    t_max.next_up()
+                    t_max.next_up().next_up().next_up().min(limit)
                 } else {
-                    *t_max
+                    limit
                 };
                 let Some(h) = intersect_triangle_sheared(&shear, ray.origin, a, b, c, bound) else {
                     continue;
                 };
                 let p = self.prims[k];
-                if best.is_none_or(|(bp, bh)| h.t < bh.t || p < bp) {
+                if best.is_none_or(|(bp, bh)| h.t < bh.t || (h.t == bh.t && p < bp)) {
                     *t_max = h.t;
                     best = Some((p, h));
                 }
@@ -423,7 +436,7 @@ fn collapse_node(bvh: &Bvh, b: usize, depth: u32, out: &mut Vec<WideNode>) -> (u
     } else {
         vec![b + 1, first.offset as usize]
     };
-    // Open the interior child of largest area until four children are reached.
+    // Open the interior child of largest area until `WIDTH` children are reached.
     while kids.len() < WIDTH {
         let Some(k) = (0..kids.len())
             .filter(|&k| !bvh.nodes[kids[k]].is_leaf())
