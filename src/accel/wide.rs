@@ -1,7 +1,8 @@
-//! A 4-wide BVH over triangles for the render's hot path: the binned-SAH binary
-//! tree of [`super::build`] collapsed into nodes of up to four children whose
-//! boxes are stored structure-of-arrays, so that one slab test covers all four
-//! (plain `[f32; 4]` lanes that the compiler vectorises; no `unsafe`), and the
+//! An 8-wide BVH over triangles for the render's hot path: the binned-SAH binary
+//! tree of [`super::build`] collapsed into nodes of up to eight children whose
+//! boxes are stored structure-of-arrays, so that one slab test covers all eight
+//! (plain `[f32; 8]` lanes that the compiler vectorises, one AVX2 register in the
+//! AVX2 clone of the queries; no `unsafe`), and the
 //! triangles copied in leaf order, so a leaf reads consecutive memory instead of
 //! going through the primitive indices.
 //!
@@ -20,8 +21,9 @@ use super::bvh::{Bvh, MAX_DEPTH};
 use super::triangle::{RayShear, TriangleHit, intersect_triangle_sheared};
 use super::{Aabb, Ray, gamma};
 
-/// Children per node.
-pub const WIDTH: usize = 4;
+/// Children per node. Eight beat four on the 100k torus (callgrind: 9-10% fewer
+/// instructions per ray; 4-6% less time) at 68 rather than 59 bytes per triangle.
+pub const WIDTH: usize = 8;
 
 /// `child` of an unused slot.
 const EMPTY: u32 = u32::MAX;
