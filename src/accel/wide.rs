@@ -176,10 +176,12 @@ impl WideBvh {
     }
 
     /// Visits leaves in near-to-far order of their boxes' entry distances while
-    /// they start before `*t_max`; `leaf(first, count, t_max)` may lower `t_max`
-    /// and returns true to stop. Returns whether a leaf stopped it.
+    /// they start before `*t_max` (`NEAREST_FIRST`), or each node's leaves before
+    /// its interior children without sorting (for any-hit queries, where order does
+    /// not decide the answer); `leaf(first, count, t_max)` may lower `t_max` and
+    /// returns true to stop. Returns whether a leaf stopped it.
     #[inline(always)]
-    fn traverse(
+    fn traverse<const NEAREST_FIRST: bool>(
         &self,
         ray: &Ray,
         t_max: &mut f32,
@@ -205,6 +207,23 @@ impl WideBvh {
             }
             let node = &self.nodes[index as usize];
             let t = boxes.test(node, *t_max);
+            if !NEAREST_FIRST {
+                for lane in 0..WIDTH {
+                    let (child, count) = (node.child[lane], node.count[lane]);
+                    if t[lane] != f32::INFINITY
+                        && count > 0
+                        && leaf(child as usize, count as usize, t_max)
+                    {
+                        return true;
+                    }
+                }
+                for lane in 0..WIDTH {
+                    if t[lane] != f32::INFINITY && node.count[lane] == 0 {
+                        stack.push((node.child[lane], t[lane]));
+                    }
+                }
+                continue;
+            }
             // Children met, nearest last so that it is popped first.
             let mut order = [0usize; WIDTH];
             let mut n = 0;
@@ -254,7 +273,7 @@ impl WideBvh {
         let mut best: Option<(u32, TriangleHit)> = None;
         let limit = t_max;
         let mut t_max = t_max;
-        self.traverse(ray, &mut t_max, |first, count, t_max| {
+        self.traverse::<true>(ray, &mut t_max, |first, count, t_max| {
             for k in first..first + count {
                 let [a, b, c] = self.tris[k];
                 // Past the best t so far by more than the rounding of the triangle test's
@@ -302,7 +321,7 @@ impl WideBvh {
     ) -> bool {
         let shear = RayShear::new(ray);
         let mut t = t_max;
-        self.traverse(ray, &mut t, |first, count, _| {
+        self.traverse::<false>(ray, &mut t, |first, count, _| {
             (first..first + count).any(|k| {
                 let [a, b, c] = self.tris[k];
                 intersect_triangle_sheared(&shear, ray.origin, a, b, c, t_max)
