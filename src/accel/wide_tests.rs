@@ -248,11 +248,6 @@ fn any_hit_visits_every_crossing_until_told_to_stop() {
 fn dispatched_queries_match_the_baseline_build_bit_for_bit() {
     // `closest_hit` runs the clone for this CPU's features (AVX2+FMA here where the CPU
     // has it); `*_inlined` called from this test is compiled for the baseline target.
-    #[cfg(target_arch = "x86_64")]
-    println!(
-        "dispatching with avx2+fma: {}",
-        std::arch::is_x86_feature_detected!("avx2") && std::arch::is_x86_feature_detected!("fma")
-    );
     for (tris, seed) in [(random_tris(3000, 11), 12), (grid(16), 13)] {
         let (_, wide) = both(&tris, SplitMethod::SahBinned);
         for (ray, t_max) in rays(4000, seed) {
