@@ -208,18 +208,18 @@ impl WideBvh {
             let node = &self.nodes[index as usize];
             let t = boxes.test(node, *t_max);
             if !NEAREST_FIRST {
-                for lane in 0..WIDTH {
+                for (lane, &entry) in t.iter().enumerate() {
                     let (child, count) = (node.child[lane], node.count[lane]);
-                    if t[lane] != f32::INFINITY
+                    if entry != f32::INFINITY
                         && count > 0
                         && leaf(child as usize, count as usize, t_max)
                     {
                         return true;
                     }
                 }
-                for lane in 0..WIDTH {
-                    if t[lane] != f32::INFINITY && node.count[lane] == 0 {
-                        stack.push((node.child[lane], t[lane]));
+                for (lane, &entry) in t.iter().enumerate() {
+                    if entry != f32::INFINITY && node.count[lane] == 0 {
+                        stack.push((node.child[lane], entry));
                     }
                 }
                 continue;
