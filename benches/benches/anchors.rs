@@ -5,7 +5,7 @@
 //! Mrays/s and the ratio glint ÷ peer as the median and the range over the
 //! rounds; then build times and glint's bytes per triangle.
 //!
-//! glint is the 4-wide BVH the render traverses; `glint-binary` is the binary
+//! glint is the 8-wide BVH the render traverses; `glint-binary` is the binary
 //! tree it is collapsed from. Peers: `obvhs` (CWBVH, always); tinybvh's
 //! BVH8_CPU (`Intersect`, `IsOccluded`; AVX2 + FMA) when build.rs could
 //! compile it, see `glint_bench::tinybvh`; Embree 4 when `GLINT_EMBREE_LIB`
@@ -47,7 +47,7 @@ fn median(v: &mut [f64]) -> f64 {
 
 /// One library's view of a mesh: how to trace a ray set, counting hits.
 enum Peer<'a> {
-    /// What the render traverses: the 4-wide BVH.
+    /// What the render traverses: the 8-wide BVH.
     Glint(&'a WideBvh),
     /// The binary BVH it is collapsed from (what the render traversed before).
     GlintBinary(&'a Bvh, &'a [[Vec3; 3]]),
@@ -182,7 +182,7 @@ fn bench_mesh(label: &str, tris: &[[Vec3; 3]], view: &View, embree: Option<(&Emb
         black_box(glint_build());
     });
     println!(
-        "  glint SAH+4    {} | {} (binary, then collapsed to 4-wide)",
+        "  glint SAH+8    {} | {} (binary, then collapsed to 8-wide)",
         ms(w1),
         ms(wn)
     );
@@ -227,7 +227,7 @@ fn bench_mesh(label: &str, tris: &[[Vec3; 3]], view: &View, embree: Option<(&Emb
     let escene = embree.map(|(e, _)| e.scene(tris).unwrap());
     let embree_bytes = Embree::bytes_in_use().saturating_sub(embree_before);
     println!(
-        "memory, bytes/tri (positions alone {:.1}): glint 4-wide {:.1} \
+        "memory, bytes/tri (positions alone {:.1}): glint 8-wide {:.1} \
          ({} nodes, depth {}; nodes + leaf-order triangles + indices), \
          glint binary {:.1} ({} nodes, {:.2}/tri; nodes + indices, positions apart)",
         per_tri(size_of_val(tris)),

@@ -9,7 +9,7 @@
 //! - [`sphere`]: precise ray/sphere intersection (Haines et al., Ray Tracing Gems ch. 7).
 //! - [`bvh`] and [`build`]: a flat depth-first BVH with binned-SAH and median builders.
 //! - [`traverse`]: closest-hit and any-hit traversal of that BVH.
-//! - [`wide`]: that BVH collapsed to 4-wide nodes with triangles in leaf order, for the render.
+//! - [`wide`]: that BVH collapsed to 8-wide nodes with triangles in leaf order, for the render.
 //! - [`instance`]: a two-level BVH, one wide BVH per mesh shared by its instances.
 
 use glam::Vec3;

@@ -32,7 +32,7 @@ pub enum PrimKind {
 /// hierarchy it is in so node and primitive ids can be told apart.
 pub trait GeometryVisitor: TraversalVisitor {
     /// Whether it observes anything: queries for a visitor that does not take the
-    /// 4-wide triangle BVH, whose nodes are not the binary ones the observers name.
+    /// wide (8-wide) triangle BVH, whose nodes are not the binary ones the observers name.
     const OBSERVES: bool = true;
     /// Called before traversing the hierarchy over primitives of `kind`.
     fn begin_hierarchy(&mut self, _kind: PrimKind) {}
@@ -89,7 +89,7 @@ pub struct SceneGeometry {
     pub tri_material: Vec<u32>,
     /// Hierarchy over the triangles.
     pub tri_bvh: Bvh,
-    /// `tri_bvh` collapsed to 4-wide nodes with the triangles in leaf order: what
+    /// `tri_bvh` collapsed to 8-wide nodes with the triangles in leaf order: what
     /// unobserved queries traverse (empty: they use `tri_bvh`).
     pub tri_wide: WideBvh,
     /// Spheres (world space).
