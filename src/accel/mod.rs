@@ -52,6 +52,10 @@ impl Ray {
     }
 }
 
+/// Ize's enlargement of a box's exit distance, so that rounding never culls a box the
+/// exact ray meets; the traversals also keep it when comparing a box with a hit.
+pub(crate) const BOX_MARGIN: f32 = 1.0 + 2.0 * gamma(3);
+
 /// Bound on the relative rounding error of `n` chained f32 operations (PBRT's gamma(n)).
 pub const fn gamma(n: u32) -> f32 {
     // Unit roundoff is half of f32::EPSILON (round-to-nearest).

@@ -5,8 +5,8 @@
 //! The stack is a fixed array on the call stack and the inverse direction is
 //! computed once per ray: no heap allocation per ray.
 
-use super::Ray;
 use super::bvh::{Bvh, MAX_DEPTH};
+use super::{BOX_MARGIN, Ray};
 
 /// Observes a traversal (for statistics and the visual debug); default methods do nothing.
 pub trait TraversalVisitor {
@@ -69,19 +69,24 @@ impl Bvh {
             t_entry: t_root,
         };
         loop {
-            // A box pushed earlier may now lie beyond the closest hit found since.
-            if cur.t_entry <= best_t {
+            // A box pushed earlier may now lie beyond the closest hit found since. With
+            // the slab test's margin, as in the wide BVH: a box entry rounded just past a
+            // hit on its face must not hide a tie there.
+            if cur.t_entry <= best_t * BOX_MARGIN {
                 visitor.visit_node(cur.node, cur.depth);
                 let node = &self.nodes[cur.node as usize];
                 if node.is_leaf() {
                     for k in node.offset..node.offset + node.count {
                         let prim = self.prim_indices[k as usize];
                         visitor.test_prim(prim);
-                        // Up to and including the best t so far: of primitives hit at
-                        // exactly the same t (where two meet), the lowest index wins,
-                        // whatever the order of the tree (the wide BVH agrees).
+                        // A few ulps past the best t so far (the rounding of the
+                        // triangle test's scaled early-out), so every primitive at the
+                        // best t passes the test and the comparison below decides: of
+                        // primitives hit at exactly the same t (where two meet), the
+                        // lowest index wins whatever the order of the tree (the wide
+                        // BVH agrees).
                         let bound = if best.is_some() {
-                            best_t.next_up()
+                            best_t.next_up().next_up().next_up().min(t_max)
                         } else {
                             best_t
                         };

@@ -19,7 +19,7 @@ use multiversion::multiversion;
 
 use super::bvh::{Bvh, MAX_DEPTH};
 use super::triangle::{RayShear, TriangleHit, intersect_triangle_sheared};
-use super::{Aabb, Ray, gamma};
+use super::{Aabb, BOX_MARGIN, Ray};
 
 /// Children per node. Eight beat four on the 100k torus (callgrind: 9-10% fewer
 /// instructions per ray; 4-6% less time) at 68 rather than 59 bytes per triangle.
@@ -94,10 +94,6 @@ const STACK_SIZE: usize = (WIDTH - 1) * MAX_DEPTH as usize + 1;
 /// The traversal stack: on the call stack and never initialised (an `ArrayVec`
 /// writes only what is pushed), so its size costs nothing per ray.
 type Stack = ArrayVec<(u32, f32), STACK_SIZE>;
-
-/// Ize's enlargement of a box's exit distance, so that rounding never culls a box the
-/// exact ray meets.
-const BOX_MARGIN: f32 = 1.0 + 2.0 * gamma(3);
 
 /// The per-ray constants of the wide slab test.
 struct RayBoxes {

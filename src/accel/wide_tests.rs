@@ -310,7 +310,7 @@ fn exact_ties_on_box_faces_go_to_the_lowest_index() {
             [a, b, c]
         }));
     }
-    let (_, wide) = both(&tris, SplitMethod::SahBinned);
+    let (binary, wide) = both(&tris, SplitMethod::SahBinned);
     let (mut ties, mut checked) = (0, 0);
     for i in 0..6000 {
         let target = (rng.vec() * 11.0).floor();
@@ -327,6 +327,9 @@ fn exact_ties_on_box_faces_go_to_the_lowest_index() {
         }
         let got = wide.closest_hit(&ray, f32::INFINITY).map(|(p, h)| (p, h.t));
         assert_eq!(got, expect, "{ray:?}");
+        // The binary tree (what the debug observes) agrees.
+        let got = binary_closest(&binary, &tris, &ray, f32::INFINITY);
+        assert_eq!(got, expect, "binary tree: {ray:?}");
         checked += 1;
         let s = RayShear::new(&ray);
         ties += expect.is_some_and(|(p, t)| {
