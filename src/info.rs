@@ -78,9 +78,10 @@ pub fn describe(renderer: &mut Renderer) -> Result<String> {
             bytes as f64 / stored as f64
         );
     }
+    let sampler = ron::to_string(&renderer.settings().sampler).unwrap_or_default();
     let _ = writeln!(
         o,
-        "  samples       {} per pixel",
+        "  samples       {} per pixel, {sampler} sampler",
         renderer.samples_per_pixel()
     );
     let _ = writeln!(o, "plan");

@@ -235,6 +235,14 @@ fn info_explains_the_plan() {
     assert!(text.contains("skipped trace_shadow_rays"), "{text}");
     assert!(text.contains("shadows are off"), "{text}");
     assert!(text.contains("runs    build_triangle_bvh"), "{text}");
+    assert!(text.contains("independent sampler"), "{text}");
+    let out = Command::new(env!("CARGO_BIN_EXE_glint"))
+        .current_dir(dir)
+        .args(["info", "scene.ron", "--set", "sampler=sobol"])
+        .output()
+        .unwrap();
+    let text = String::from_utf8_lossy(&out.stdout);
+    assert!(text.contains("sobol sampler"), "{text}");
 }
 
 /// `glint info scene.ron | head -1`: the reader closes the pipe before glint writes.
