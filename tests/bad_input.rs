@@ -226,22 +226,20 @@ fn info_explains_the_plan() {
     let (ok, _, tmp) = run_cli(Some(GOOD), &["info", "scene.ron"]);
     let dir = tmp.path();
     assert!(ok);
-    let out = Command::new(env!("CARGO_BIN_EXE_glint"))
-        .current_dir(dir)
-        .args(["info", "scene.ron", "--set", "shadows=false"])
-        .output()
-        .unwrap();
-    let text = String::from_utf8_lossy(&out.stdout);
+    let info = |set: &str| {
+        let out = Command::new(env!("CARGO_BIN_EXE_glint"))
+            .current_dir(dir)
+            .args(["info", "scene.ron", "--set", set])
+            .output()
+            .unwrap();
+        String::from_utf8_lossy(&out.stdout).into_owned()
+    };
+    let text = info("shadows=false");
     assert!(text.contains("skipped trace_shadow_rays"), "{text}");
     assert!(text.contains("shadows are off"), "{text}");
     assert!(text.contains("runs    build_triangle_bvh"), "{text}");
     assert!(text.contains("independent sampler"), "{text}");
-    let out = Command::new(env!("CARGO_BIN_EXE_glint"))
-        .current_dir(dir)
-        .args(["info", "scene.ron", "--set", "sampler=sobol"])
-        .output()
-        .unwrap();
-    let text = String::from_utf8_lossy(&out.stdout);
+    let text = info("sampler=sobol");
     assert!(text.contains("sobol sampler"), "{text}");
 }
 

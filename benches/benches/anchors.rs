@@ -67,64 +67,68 @@ impl Peer<'_> {
         }
     }
 
+    /// Hits among `rays`: any-hit queries up to t = 1 for shadow rays, closest-hit
+    /// queries without a bound otherwise.
     fn trace(&self, rays: &[Ray], shadow: bool) -> u32 {
-        let mut hits = 0u32;
         match self {
-            Peer::Glint(wide) => {
-                for r in rays {
-                    hits += if shadow {
-                        wide.any_hit(r, 1.0, |_, _| true) as u32
-                    } else {
-                        wide.closest_hit(r, f32::INFINITY).is_some() as u32
-                    };
-                }
-            }
-            Peer::GlintBinary(bvh, tris) => {
-                for r in rays {
-                    hits += if shadow {
-                        glint_occluded(bvh, tris, r) as u32
-                    } else {
-                        glint_closest(bvh, tris, r).is_some() as u32
-                    };
-                }
-            }
+            Peer::Glint(wide) => count_hits(
+                rays,
+                shadow,
+                |r| wide.any_hit(r, 1.0, |_, _| true),
+                |r| wide.closest_hit(r, f32::INFINITY).is_some(),
+            ),
+            Peer::GlintBinary(bvh, tris) => count_hits(
+                rays,
+                shadow,
+                |r| glint_occluded(bvh, tris, r),
+                |r| glint_closest(bvh, tris, r).is_some(),
+            ),
             Peer::Obvhs(cw, tris) => {
-                for r in rays {
-                    let t_max = if shadow { 1.0 } else { f32::INFINITY };
-                    let o = ORay::new(Vec3A::from(r.origin), Vec3A::from(r.dir), 0.0, t_max);
-                    hits += if shadow {
-                        !cw.ray_traverse_miss(o, |r, id| {
+                let ray = |r: &Ray, t_max| {
+                    ORay::new(Vec3A::from(r.origin), Vec3A::from(r.dir), 0.0, t_max)
+                };
+                count_hits(
+                    rays,
+                    shadow,
+                    |r| {
+                        !cw.ray_traverse_miss(ray(r, 1.0), |r, id| {
                             tris[cw.primitive_indices[id] as usize].intersect(r)
-                        }) as u32
-                    } else {
+                        })
+                    },
+                    |r| {
                         let mut hit = RayHit::none();
-                        cw.ray_traverse(o, &mut hit, |r, id| {
+                        cw.ray_traverse(ray(r, f32::INFINITY), &mut hit, |r, id| {
                             tris[cw.primitive_indices[id] as usize].intersect(r)
-                        }) as u32
-                    };
-                }
+                        })
+                    },
+                )
             }
-            Peer::Embree(s) => {
-                for r in rays {
-                    hits += if shadow {
-                        s.occluded(r, 1.0) as u32
-                    } else {
-                        s.closest(r).is_some() as u32
-                    };
-                }
-            }
-            Peer::TinyBvh(b) => {
-                for r in rays {
-                    hits += if shadow {
-                        b.occluded(r, 1.0) as u32
-                    } else {
-                        b.closest(r).is_some() as u32
-                    };
-                }
-            }
+            Peer::Embree(s) => count_hits(
+                rays,
+                shadow,
+                |r| s.occluded(r, 1.0),
+                |r| s.closest(r).is_some(),
+            ),
+            Peer::TinyBvh(b) => count_hits(
+                rays,
+                shadow,
+                |r| b.occluded(r, 1.0),
+                |r| b.closest(r).is_some(),
+            ),
         }
-        hits
     }
+}
+
+/// The one loop every peer's queries run in, so that the loops cost alike.
+fn count_hits(
+    rays: &[Ray],
+    shadow: bool,
+    occluded: impl Fn(&Ray) -> bool,
+    closest: impl Fn(&Ray) -> bool,
+) -> u32 {
+    rays.iter()
+        .map(|r| if shadow { occluded(r) } else { closest(r) } as u32)
+        .sum()
 }
 
 /// Median and range of `f` over `rounds` runs, in milliseconds.
