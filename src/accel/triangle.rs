@@ -10,7 +10,7 @@
 
 use glam::Vec3;
 
-use super::{Ray, gamma};
+use super::Ray;
 
 /// A ray/triangle hit: parameter `t` and the barycentric weights of v0, v1, v2.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -40,6 +40,8 @@ pub struct RayShear {
     pub sy: f32,
     /// Scale of z: `1 / dir[kz]`.
     pub sz: f32,
+    /// The ray's direction, for the f64 recheck of hits near t = 0.
+    pub dir: Vec3,
 }
 
 impl RayShear {
@@ -68,6 +70,7 @@ impl RayShear {
             sx: ray.dir[kx] / dz,
             sy: ray.dir[ky] / dz,
             sz: 1.0 / dz,
+            dir: ray.dir,
         }
     }
 }
@@ -156,7 +159,7 @@ pub fn intersect_triangle_sheared(
     }
 
     let inv_det = 1.0 / det;
-    let t = t_scaled * inv_det;
+    let mut t = t_scaled * inv_det;
     // The division can round onto the bounds; also rejects NaN from a zero ray.
     if !(t > 0.0 && t < t_max) {
         return None;
@@ -167,18 +170,27 @@ pub fn intersect_triangle_sheared(
     // pbrt (3rd ed., 3.9.6) but carries each vertex's own magnitudes through the shear
     // (pbrt's bounds every sheared y by the largest z), so that a ray grazing a surface
     // from even a few ulps away still hits it.
-    if t <= 3.0
-        * t_error(
-            s,
-            [a, b, c],
-            [ax, ay, bx, by, cx, cy],
-            [u, v, w],
-            [az, bz, cz],
-            t,
-            inv_det,
-        )
-    {
-        return None;
+    let widen = |v: [f32; 3]| v.map(f64::from);
+    let bound = t_error(
+        s,
+        [a, b, c].map(widen),
+        [ax, ay, bx, by, cx, cy].map(f64::from),
+        widen([u, v, w]),
+        widen([az, bz, cz]),
+        f64::from(t),
+        f64::from(inv_det),
+        F32_UNIT_ROUNDOFF,
+    );
+    if f64::from(t) <= 3.0 * bound {
+        // That bound is first order in the vertices' distance from the origin and can
+        // exceed the true t many times over: a long thin triangle seen at a grazing angle
+        // from an origin near it (Sponza's floor trim in the anchors bench, hit at t =
+        // 0.003 with a bound of 0.004). Decide again in f64, whose bound is 2^29 times
+        // smaller, so that only a t within f64 rounding of 0 is lost.
+        t = t_in_f64(s, ray_origin, [v0, v1, v2]).map(|t| t as f32)?;
+        if !(t > 0.0 && t < t_max) {
+            return None;
+        }
     }
     Some(TriangleHit {
         t,
@@ -188,34 +200,68 @@ pub fn intersect_triangle_sheared(
     })
 }
 
-/// First-order bound on the rounding error of the computed `t`.
+/// Unit roundoff of f32 (round to nearest), as f64.
+const F32_UNIT_ROUNDOFF: f64 = f32::EPSILON as f64 * 0.5;
+
+/// PBRT's gamma(n) for unit roundoff `unit`: bound on the relative error of n chained
+/// operations.
+fn gamma_for(n: u32, unit: f64) -> f64 {
+    n as f64 * unit / (1.0 - n as f64 * unit)
+}
+
+/// First-order bound on the rounding error of a `t` computed with unit roundoff `unit`.
 ///
 /// `rel` are the vertices relative to the ray origin, `sheared` their sheared x and y,
 /// `e` the edge functions, `z` the scaled z coordinates.
+#[allow(clippy::too_many_arguments)]
 #[inline(always)]
 fn t_error(
     s: &RayShear,
-    rel: [[f32; 3]; 3],
-    sheared: [f32; 6],
-    e: [f32; 3],
-    z: [f32; 3],
-    t: f32,
-    inv_det: f32,
-) -> f32 {
-    let [ax, ay, bx, by, cx, cy] = sheared.map(f32::abs);
+    rel: [[f64; 3]; 3],
+    sheared: [f64; 6],
+    e: [f64; 3],
+    z: [f64; 3],
+    t: f64,
+    inv_det: f64,
+    unit: f64,
+) -> f64 {
+    let gamma = |n| gamma_for(n, unit);
+    let [ax, ay, bx, by, cx, cy] = sheared.map(f64::abs);
+    let (sx, sy) = (
+        f64::from(s.dir[s.kx]) / f64::from(s.dir[s.kz]),
+        f64::from(s.dir[s.ky]) / f64::from(s.dir[s.kz]),
+    );
     // Errors of the sheared coordinates: the subtraction from the origin, the shear product, the difference.
-    let ex = rel.map(|p| gamma(5) * (p[s.kx].abs() + (s.sx * p[s.kz]).abs()));
-    let ey = rel.map(|p| gamma(5) * (p[s.ky].abs() + (s.sy * p[s.kz]).abs()));
+    let ex = rel.map(|p| gamma(5) * (p[s.kx].abs() + (sx * p[s.kz]).abs()));
+    let ey = rel.map(|p| gamma(5) * (p[s.ky].abs() + (sy * p[s.kz]).abs()));
     let g2 = gamma(2);
     // Errors of the edge functions u = cx by - cy bx, v = ax cy - ay cx, w = bx ay - by ax.
     let eu = cx * ey[1] + by * ex[2] + cy * ex[1] + bx * ey[2] + g2 * (cx * by + cy * bx);
     let ev = ax * ey[2] + cy * ex[0] + ay * ex[2] + cx * ey[0] + g2 * (ax * cy + ay * cx);
     let ew = bx * ey[0] + ay * ex[1] + by * ex[0] + ax * ey[1] + g2 * (bx * ay + by * ax);
-    let [u, v, w] = e.map(f32::abs);
-    let [az, bz, cz] = z.map(f32::abs);
+    let [u, v, w] = e.map(f64::abs);
+    let [az, bz, cz] = z.map(f64::abs);
     let e_det = eu + ev + ew + g2 * (u + v + w);
     let e_scaled = eu * az + ev * bz + ew * cz + gamma(6) * (u * az + v * bz + w * cz);
-    (e_scaled + t.abs() * e_det) * inv_det.abs() * (1.0 + gamma(2))
+    (e_scaled + t.abs() * e_det) * inv_det.abs() * (1.0 + g2)
+}
+
+/// The hit distance recomputed in f64 from the f32 inputs (the same shear, edge
+/// functions and scaled z), or None when it lies within its f64 rounding error of 0.
+#[cold]
+fn t_in_f64(s: &RayShear, origin: Vec3, v: [Vec3; 3]) -> Option<f64> {
+    let d = s.dir.as_dvec3().to_array();
+    let (sx, sy, sz) = (d[s.kx] / d[s.kz], d[s.ky] / d[s.kz], 1.0 / d[s.kz]);
+    let rel = v.map(|p| (p.as_dvec3() - origin.as_dvec3()).to_array());
+    let [[ax, ay], [bx, by], [cx, cy]] =
+        rel.map(|p| [p[s.kx] - sx * p[s.kz], p[s.ky] - sy * p[s.kz]]);
+    let e = [cx * by - cy * bx, ax * cy - ay * cx, bx * ay - by * ax];
+    let inv_det = 1.0 / (e[0] + e[1] + e[2]);
+    let z = rel.map(|p| sz * p[s.kz]);
+    let t = (e[0] * z[0] + e[1] * z[1] + e[2] * z[2]) * inv_det;
+    let unit = f64::EPSILON * 0.5;
+    let bound = t_error(s, rel, [ax, ay, bx, by, cx, cy], e, z, t, inv_det, unit);
+    (t > 3.0 * bound).then_some(t)
 }
 
 /// True when the three vertices are exactly collinear (or coincide).
@@ -289,6 +335,47 @@ mod tests {
         // Origin on the triangle: t = 0 is not a hit.
         let r = Ray::new(vec3(0.2, 0.2, 0.0), vec3(0.0, 0.0, 1.0));
         assert!(intersect_triangle(&r, V0, V1, V2, 10.0).is_none());
+    }
+
+    #[test]
+    fn near_hits_on_long_thin_triangles_are_kept() {
+        // Sponza's floor trim: a triangle 10.8 long and 0.015 wide, hit at a grazing
+        // angle from 0.002 above a neighbouring surface, well inside (barycentrics 0.61,
+        // 0.32, 0.07). Exact t (rational arithmetic on these f32 values) 0.0033638108;
+        // the f32 computation's error is 2.6e-5 but its first-order bound 0.004, which
+        // alone would drop the hit (Embree, tinybvh and obvhs all report it).
+        let r = Ray::new(
+            vec3(-6.630026, 15.621754, 2.423566),
+            vec3(0.6863056, 0.38305056, -0.6182693),
+        );
+        let (a, b, c) = (
+            vec3(-10.812759, 15.61831, 2.421486),
+            vec3(0.00724, 15.633309, 2.421487),
+            vec3(0.00724, 15.61831, 2.421487),
+        );
+        let h = intersect_triangle(&r, a, b, c, f32::INFINITY).expect("a hit at t = 0.00336");
+        assert!((h.t - 0.003_363_810_8).abs() < 1e-8, "t = {}", h.t);
+        // Still open at t = 0: from an origin exactly on such a triangle (in the plane
+        // z = 0, so that f32 origins lie exactly on it), no grazing direction hits it.
+        let (a, b, c) = (
+            vec3(-10.812759, 0.0, 0.0),
+            vec3(0.00724, 0.015, 0.0),
+            Vec3::ZERO,
+        );
+        let mut rng = Lcg(11);
+        for _ in 0..10_000 {
+            let w = [rng.next_f32(), rng.next_f32()];
+            let o = a + w[0] * (b - a) + w[1] * (1.0 - w[0]) * (c - a);
+            let d = vec3(
+                rng.next_f32() - 0.5,
+                rng.next_f32() - 0.5,
+                1e-4 * (rng.next_f32() - 0.5),
+            );
+            assert!(o.z == 0.0);
+            if let Some(h) = intersect_triangle(&Ray::new(o, d), a, b, c, f32::INFINITY) {
+                assert!(h.t * d.length() < 1e-5, "origin {o} dir {d}: t = {}", h.t);
+            }
+        }
     }
 
     #[test]
