@@ -103,6 +103,27 @@ fn instanced_meshes_render_like_flattened_copies() {
     assert!(identical * 2 >= total, "{identical} of {total} identical");
 }
 
+#[test]
+fn without_acceleration_shared_meshes_are_flattened() {
+    let n = 16;
+    let none = scene(n).replace("settings: (", "settings: (acceleration: none, ");
+    let copied = render(&none);
+    let mut shared = load(&none);
+    share_meshes(&mut shared);
+    let shared = render_loaded(shared);
+    let g = geometry(&shared);
+    assert!(
+        g.instanced.is_empty(),
+        "a top-level BVH under acceleration: None"
+    );
+    // Every triangle of every copy, in the one leaf, and the same image.
+    assert_eq!(g.tri_positions.len(), geometry(&copied).tri_positions.len());
+    assert_eq!(g.tri_bvh.nodes.len(), 1);
+    for (x, y) in (0..n).flat_map(|y| (0..n).map(move |x| (x, y))) {
+        assert_eq!(shared.film().pixel(x, y), copied.film().pixel(x, y));
+    }
+}
+
 /// Three instances of a quad (sheared, mirrored, plain) and two of a glass cube, with
 /// the transforms set on the loaded entities; prepared, not rendered.
 fn placed_instances() -> Renderer {

@@ -135,6 +135,9 @@ pub fn build_triangle_bvh(
 ) {
     let g = &mut *geometry;
     let uses = mesh_uses(meshes.iter().map(|(m, _, _)| m));
+    // Without acceleration every triangle is tested against every ray, instances too:
+    // a top-level BVH would be acceleration the setting asks to leave out.
+    let instancing = settings.acceleration == Acceleration::Bvh;
     // Index in `instanced_meshes` of each shared mesh, in order of first use.
     let mut mesh_index: HashMap<*const MeshData, u32> = HashMap::new();
     let mut instances = Vec::new();
@@ -142,7 +145,7 @@ pub fn build_triangle_bvh(
         let m = transform.world_from_object;
         let material = materials.index_of.get(&material.0).copied().unwrap_or(0);
         let key = Arc::as_ptr(&mesh.data);
-        if uses[&key] >= 2 {
+        if instancing && uses[&key] >= 2 {
             let next = mesh_index.len() as u32;
             let index = *mesh_index.entry(key).or_insert(next);
             // A map without an inverse (zero scale) leaves its instance flattened.
