@@ -45,6 +45,8 @@ pub struct Shading<'a> {
 
 impl Shading<'_> {
     /// The light sample's contribution, exactly as SPEC "Shading".
+    // Inlined into the light-sample loop: the call passed the whole input on the stack.
+    #[inline(always)]
     pub fn shade(&self, input: &ShadingInput) -> Vec3 {
         if !lit(input) {
             return Vec3::ZERO;

@@ -134,6 +134,10 @@ pub struct Wavefront {
     pub ray_radiance: Vec<Vec3>,
     /// Shadow rays cast this depth.
     pub shadow_rays: Vec<ShadowRay>,
+    /// Each shading chunk's shadow rays before they join `shadow_rays`: kept between
+    /// depths and regions, because freeing them returned their pages to the kernel and
+    /// every region faulted them in anew (a tenth of the render's time in the kernel).
+    pub shadow_chunks: Vec<Vec<ShadowRay>>,
     /// What each shadow ray let through: its contribution times visibility (or tint).
     pub shadow_arrived: Vec<Vec3>,
     /// Rays for the next depth.
@@ -380,39 +384,46 @@ fn shade_ray(
 /// Shades rays and hits chunk by chunk, in parallel, into `radiance` (each ray's) and
 /// `shadow_rays`, both in queue order; returns what `O` observed. Both buffers are the
 /// last depth's, refilled so that their allocations are reused. Chunks, not rays, own
-/// the shadow-ray vectors: no allocation per ray, and joining them in chunk order keeps
-/// the queue deterministic.
+/// the shadow-ray vectors (`chunk_shadows`, reused too): no allocation per ray, and
+/// joining them in chunk order keeps the queue deterministic.
 fn shade_chunks<O: LightObserver>(
     cx: &ShadeContext,
     rays: &[QueuedRay],
     hits: &[Option<Surface>],
     radiance: &mut Vec<Vec3>,
+    chunk_shadows: &mut Vec<Vec<ShadowRay>>,
     shadow_rays: &mut Vec<ShadowRay>,
 ) -> O {
     radiance.clear();
     radiance.resize(rays.len(), Vec3::ZERO);
-    let chunks: Vec<(Vec<ShadowRay>, O)> = rays
+    let chunks = rays.len().div_ceil(CHUNK);
+    if chunk_shadows.len() < chunks {
+        chunk_shadows.resize_with(chunks, Vec::new);
+    }
+    let chunk_shadows = &mut chunk_shadows[..chunks];
+    let observers: Vec<O> = rays
         .par_chunks(CHUNK)
         .zip(hits.par_chunks(CHUNK))
         .zip(radiance.par_chunks_mut(CHUNK))
+        .zip(chunk_shadows.par_iter_mut())
         .enumerate()
-        .map(|(c, ((rays, hits), out))| {
-            let mut shadows = Vec::new();
+        .map(|(c, (((rays, hits), out), shadows))| {
+            shadows.clear();
             let mut observer = O::default();
             for (k, ((q, hit), r)) in rays.iter().zip(hits).zip(out).enumerate() {
                 let i = c * CHUNK + k;
-                *r = shade_ray(cx, i, q, hit, &mut shadows, |ls, c, shadow| {
+                *r = shade_ray(cx, i, q, hit, shadows, |ls, c, shadow| {
                     observer.seen(i as u32, ls, c, shadow)
                 });
             }
-            (shadows, observer)
+            observer
         })
         .collect();
     shadow_rays.clear();
     let mut observed = O::default();
-    for (s, o) in chunks {
+    for (s, o) in chunk_shadows.iter().zip(observers) {
         observed.join(o, shadow_rays.len() as u32);
-        shadow_rays.extend(s);
+        shadow_rays.extend_from_slice(s);
     }
     observed
 }
@@ -448,11 +459,16 @@ pub fn shade_hits(
         queue_shadows: plan.shadow_rays,
     };
     let wf = &mut *wf;
-    let (radiance, shadows) = (&mut wf.ray_radiance, &mut wf.shadow_rays);
+    let (rays, hits) = (&wf.rays, &wf.hits);
+    let (radiance, chunks, shadows) = (
+        &mut wf.ray_radiance,
+        &mut wf.shadow_chunks,
+        &mut wf.shadow_rays,
+    );
     match log {
-        None => shade_chunks::<()>(&cx, &wf.rays, &wf.hits, radiance, shadows),
+        None => shade_chunks::<()>(&cx, rays, hits, radiance, chunks, shadows),
         Some(mut log) => {
-            log.light_samples = shade_chunks(&cx, &wf.rays, &wf.hits, radiance, shadows);
+            log.light_samples = shade_chunks(&cx, rays, hits, radiance, chunks, shadows);
         }
     }
     stats.record(

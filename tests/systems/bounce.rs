@@ -111,6 +111,28 @@ fn shade_hits_queues_the_closed_form_radiance_as_a_shadow_ray() {
 }
 
 #[test]
+fn shade_hits_reuses_its_shadow_buffers_without_keeping_old_rays() {
+    let mut world = shade_world(true);
+    run(&mut world, shade_hits);
+    let first = world.resource::<Wavefront>().shadow_rays.clone();
+    run(&mut world, shade_hits);
+    assert_eq!(
+        world.resource::<Wavefront>().shadow_rays,
+        first,
+        "the same hit casts the same shadow ray, once"
+    );
+    // A depth whose only ray misses casts none, whatever the last one left behind.
+    world.resource_mut::<Wavefront>().hits = vec![None];
+    run(&mut world, shade_hits);
+    let wf = world.resource::<Wavefront>();
+    assert!(wf.shadow_rays.is_empty());
+    assert!(
+        wf.shadow_chunks[0].capacity() >= 1,
+        "the chunk's buffer is kept for the next depth"
+    );
+}
+
+#[test]
 fn shade_hits_adds_the_closed_form_radiance_without_shadow_rays() {
     let mut world = shade_world(false);
     run(&mut world, shade_hits);
