@@ -73,6 +73,7 @@ type AnyLight = Or<(
 type AreaLight = Or<(With<SegmentLight>, With<ParallelogramLight>)>;
 
 /// Analyses the scene and settings and writes the [`RenderPlan`].
+#[allow(clippy::too_many_arguments)] // Because each is a part of the scene the plan reads.
 pub fn analyse_scene(
     mut plan: ResMut<RenderPlan>,
     settings: Res<Settings>,
