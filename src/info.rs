@@ -8,9 +8,14 @@ use crate::error::Result;
 use crate::render::Renderer;
 use crate::scene::{Material, Mesh, ParallelogramLight, PointLight, SegmentLight, Sphere};
 use crate::trace::geometry::SceneGeometry;
+use crate::trace::plan::BinaryBvhObserver;
 
-/// A human-readable report of the scene and its render plan (runs the prepare stage).
+/// A human-readable report of the scene and its render plan (runs the prepare stage,
+/// keeping the binary triangle BVH for its statistics).
 pub fn describe(renderer: &mut Renderer) -> Result<String> {
+    renderer
+        .world
+        .insert_resource(BinaryBvhObserver("glint info's tree statistics"));
     renderer.prepare()?;
     let w = &mut renderer.world;
     let count = |w: &mut World, f: fn(&mut World) -> usize| f(w);
@@ -70,6 +75,14 @@ pub fn describe(renderer: &mut Renderer) -> Result<String> {
         );
     }
     let stored = geometry.triangles_stored();
+    if !bvh.nodes.is_empty() && stored > 0 {
+        let bytes = size_of_val(bvh.nodes.as_slice()) + size_of_val(bvh.prim_indices.as_slice());
+        let _ = writeln!(
+            o,
+            "  binary BVH    {bytes} bytes, {:.1} per stored triangle (kept for observers; a render drops it)",
+            bytes as f64 / stored as f64
+        );
+    }
     if stored > 0 {
         let bytes = geometry.triangle_bytes();
         let _ = writeln!(

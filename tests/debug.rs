@@ -21,7 +21,7 @@ use glint::scene::format::SceneFile;
 use glint::scene::{Camera, read_scene};
 use glint::schedule::{Bounce, Prepare, RenderPass};
 use glint::trace::camera::camera_ray;
-use glint::trace::geometry::SceneGeometry;
+use glint::trace::geometry::{PrimKind, SceneGeometry};
 use glint::trace::log::TraceLog;
 
 fn debug(file: &SceneFile, request: DebugRequest) -> DebugSession {
@@ -251,6 +251,19 @@ fn reflection_chain_matches_analytic_bounce_points() {
             .iter()
             .all(|p| matches!(p.feature, Feature::Pixel | Feature::Reflections))
     );
+}
+
+#[test]
+fn the_debug_keeps_the_binary_triangle_bvh_a_render_drops() {
+    let file = parse(BUSY);
+    let s = debug(&file, only(12, 20, &[Feature::Bvh]));
+    assert!(s.renderer.plan().binary_triangle_bvh);
+    let g = s.renderer.world.resource::<SceneGeometry>();
+    assert!(!g.tri_bvh.nodes.is_empty());
+    assert_eq!(g.tri_bvh.prim_indices, g.tri_wide.prims);
+    // The trace log walked it: the camera ray visited triangle nodes.
+    let nodes = &s.log().rays[0].traversal.nodes;
+    assert!(nodes.iter().any(|v| v.kind == PrimKind::Triangle));
 }
 
 #[test]

@@ -8,6 +8,7 @@ use glam::Vec3;
 use glint::accel::Aabb;
 use glint::stats::Stage;
 use glint::trace::geometry::SceneGeometry;
+use glint::trace::plan::BinaryBvhObserver;
 
 const SQRT_HALF: f32 = std::f32::consts::FRAC_1_SQRT_2;
 
@@ -60,6 +61,7 @@ fn blinn_phong_pixel_matches_the_closed_form() {
 #[test]
 fn the_bvh_built_by_the_schedule_validates_and_covers_every_triangle() {
     let mut r = load(&std::fs::read_to_string("scenes/cornell_box.ron").unwrap());
+    r.world.insert_resource(BinaryBvhObserver("this test"));
     r.prepare().unwrap();
     let g = r.world.resource::<SceneGeometry>();
     // 5 walls of 2 triangles, 2 boxes of 12.
@@ -75,6 +77,23 @@ fn the_bvh_built_by_the_schedule_validates_and_covers_every_triangle() {
     covered.sort_unstable();
     assert_eq!(covered, (0..34).collect::<Vec<u32>>());
     assert!(r.stats().ran(Stage::BuildTriangleBvh));
+}
+
+#[test]
+fn a_render_keeps_only_the_wide_triangle_bvh() {
+    let mut r = load(&std::fs::read_to_string("scenes/cornell_box.ron").unwrap());
+    r.render(None, &mut |_| {}).unwrap();
+    assert!(!r.plan().binary_triangle_bvh);
+    let g = r.world.resource::<SceneGeometry>();
+    assert!(g.tri_bvh.nodes.is_empty() && g.tri_bvh.prim_indices.is_empty());
+    g.tri_wide.validate(&g.tri_positions).unwrap();
+    assert_eq!(g.tri_wide.prims.len(), 34);
+    let entry = r
+        .plan()
+        .entries
+        .iter()
+        .find(|e| e.stage == "keep binary triangle BVH");
+    assert!(!entry.unwrap().runs);
 }
 
 #[test]

@@ -148,12 +148,23 @@ impl WideBvh {
     /// largest-area interior grandchildren in place of their parents; leaves and
     /// their triangle order are the binary tree's.
     pub fn collapse(bvh: &Bvh, positions: &[[Vec3; 3]]) -> WideBvh {
+        WideBvh::collapse_with(bvh, bvh.prim_indices.clone(), positions)
+    }
+
+    /// [`WideBvh::collapse`] of a binary tree not kept after it: its `prim_indices`
+    /// move into `prims` instead of being copied.
+    pub fn collapse_owned(mut bvh: Bvh, positions: &[[Vec3; 3]]) -> WideBvh {
+        let prims = std::mem::take(&mut bvh.prim_indices);
+        WideBvh::collapse_with(&bvh, prims, positions)
+    }
+
+    /// [`WideBvh::collapse`] with the binary tree's `prim_indices` given as `prims`.
+    fn collapse_with(bvh: &Bvh, prims: Vec<u32>, positions: &[[Vec3; 3]]) -> WideBvh {
         if bvh.nodes.is_empty() {
             return WideBvh::default();
         }
         let mut nodes = Vec::with_capacity(bvh.nodes.len() / 2 + 1);
         let depth = collapse_node(bvh, 0, 0, &mut nodes).1;
-        let prims = bvh.prim_indices.clone();
         let tris = prims.iter().map(|&p| positions[p as usize]).collect();
         WideBvh {
             nodes,

@@ -46,7 +46,7 @@ use crate::schedule::run_passes;
 use crate::trace::geometry::SceneGeometry;
 use crate::trace::lights::Lights;
 use crate::trace::materials::Materials;
-use crate::trace::plan::RenderPlan;
+use crate::trace::plan::{BinaryBvhObserver, RenderPlan};
 use crate::trace::surface::surface_at;
 
 pub use log::DebugTrace;
@@ -170,6 +170,10 @@ impl DebugSession {
         record::add_recorders(&mut renderer.world);
         renderer.world.init_resource::<emit::SpawnedPrimitives>();
         renderer.world.insert_resource(request);
+        // The trace log and the BVH view name the binary tree's nodes.
+        renderer
+            .world
+            .insert_resource(BinaryBvhObserver("the debug's trace log and BVH view"));
         renderer.world.add_schedule(debug_emit_schedule());
         renderer.prepare()?;
         let pixel = y * camera.width + x;

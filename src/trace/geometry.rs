@@ -10,6 +10,7 @@ use bevy_ecs::prelude::*;
 use glam::{Vec2, Vec3};
 
 use super::materials::Materials;
+use super::plan::RenderPlan;
 use crate::accel::sphere::{sphere_roots, sphere_uv};
 use crate::accel::triangle::{RayShear, TriangleHit, intersect_triangle_sheared};
 use crate::accel::{
@@ -87,7 +88,8 @@ pub struct SceneGeometry {
     pub tri_texcoords: Vec<[Vec2; 3]>,
     /// Material index of each triangle.
     pub tri_material: Vec<u32>,
-    /// Hierarchy over the triangles.
+    /// Binary hierarchy over the triangles, which `tri_wide` is collapsed from: kept
+    /// only for observers (see [`RenderPlan::binary_triangle_bvh`]), else empty.
     pub tri_bvh: Bvh,
     /// `tri_bvh` collapsed to 8-wide nodes with the triangles in leaf order: what
     /// unobserved queries traverse (empty: they use `tri_bvh`).
@@ -126,8 +128,10 @@ fn build(bounds: &[Aabb], s: &Settings) -> Bvh {
 
 /// Transforms every mesh used once to world space and builds the triangle BVH; meshes
 /// used by two or more entities get one object-space BVH each, shared by their instances.
+/// The binary tree is kept after collapsing only when the plan says an observer walks it.
 pub fn build_triangle_bvh(
     settings: Res<Settings>,
+    plan: Res<RenderPlan>,
     meshes: Query<(&Mesh, &Transform, &crate::scene::MaterialRef)>,
     materials: Res<Materials>,
     mut geometry: ResMut<SceneGeometry>,
@@ -181,8 +185,16 @@ pub fn build_triangle_bvh(
         .iter()
         .map(|p| Aabb::from_points(p))
         .collect();
-    g.tri_bvh = build(&bounds, &settings);
-    g.collapse_triangle_bvh();
+    let flattened = bounds.len();
+    let bvh = build(&bounds, &settings);
+    // Freed before the wide tree is made, when memory peaks (both trees are alive).
+    drop(bounds);
+    if plan.binary_triangle_bvh {
+        g.tri_bvh = bvh;
+        g.collapse_triangle_bvh();
+    } else {
+        g.tri_wide = WideBvh::collapse_owned(bvh, &g.tri_positions);
+    }
     let bottom: Vec<WideBvh> = g
         .instanced_meshes
         .iter()
@@ -190,7 +202,7 @@ pub fn build_triangle_bvh(
         .collect();
     let stored: usize = bottom.iter().map(|b| b.prims.len()).sum();
     g.instanced = TwoLevelBvh::new(bottom, instances, split_method(&settings));
-    stats.record(Stage::BuildTriangleBvh, (bounds.len() + stored) as u64);
+    stats.record(Stage::BuildTriangleBvh, (flattened + stored) as u64);
 }
 
 /// How many entities use each mesh's data; a mesh used by two or more is instanced.
@@ -211,7 +223,7 @@ fn object_bvh(data: &MeshData, settings: &Settings) -> WideBvh {
         .map(|t| t.map(|i| v[i as usize].position))
         .collect();
     let bounds: Vec<Aabb> = positions.iter().map(|p| Aabb::from_points(p)).collect();
-    WideBvh::collapse(&build(&bounds, settings), &positions)
+    WideBvh::collapse_owned(build(&bounds, settings), &positions)
 }
 
 /// Gathers the spheres and builds their BVH.
@@ -246,9 +258,11 @@ impl SceneGeometry {
         self.tri_wide = WideBvh::collapse(&self.tri_bvh, &self.tri_positions);
     }
 
-    /// Whether queries observed by `V` traverse the wide triangle BVH.
+    /// Whether queries observed by `V` traverse the wide triangle BVH: unobserved ones,
+    /// and observed ones when the binary tree was dropped (they then still find the
+    /// render's hits, but see no triangle nodes).
     fn use_wide<V: GeometryVisitor>(&self) -> bool {
-        !V::OBSERVES && !self.tri_wide.nodes.is_empty()
+        !self.tri_wide.nodes.is_empty() && (!V::OBSERVES || self.tri_bvh.nodes.is_empty())
     }
 
     /// The closest hit in (0, t_max), triangles and spheres alike.
@@ -504,7 +518,9 @@ impl SceneGeometry {
     pub fn bounds(&self) -> Aabb {
         let mut b = Aabb::EMPTY;
         b = b.union(self.instanced.bounds());
-        if !self.tri_bvh.nodes.is_empty() {
+        if !self.tri_wide.nodes.is_empty() {
+            b = b.union(self.tri_wide.bounds);
+        } else if !self.tri_bvh.nodes.is_empty() {
             b = b.union(self.tri_bvh.bounds());
         }
         if !self.sphere_bvh.nodes.is_empty() {

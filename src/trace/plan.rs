@@ -22,6 +22,9 @@ pub struct PlanEntry {
 pub struct RenderPlan {
     /// Build a BVH over triangles (the scene has meshes).
     pub triangle_bvh: bool,
+    /// Keep the binary triangle BVH after collapsing it to the 8-wide one (a
+    /// [`BinaryBvhObserver`] walks it); a render traverses only the wide one.
+    pub binary_triangle_bvh: bool,
     /// Build a BVH over spheres (the scene has spheres).
     pub sphere_bvh: bool,
     /// Decode textures and look them up (a material has one and texture mapping is on).
@@ -53,6 +56,13 @@ impl RenderPlan {
     }
 }
 
+/// Inserted before the prepare stage by a driver whose observers walk the binary
+/// triangle BVH (the debug's traversal log and BVH view, `glint info`'s tree
+/// statistics): names that observer. Without it the binary tree is dropped once
+/// collapsed, since the render's queries traverse only the wide tree.
+#[derive(Resource, Clone, Debug, PartialEq, Eq)]
+pub struct BinaryBvhObserver(pub &'static str);
+
 /// Query filter: any light entity.
 type AnyLight = Or<(
     With<PointLight>,
@@ -63,6 +73,7 @@ type AnyLight = Or<(
 type AreaLight = Or<(With<SegmentLight>, With<ParallelogramLight>)>;
 
 /// Analyses the scene and settings and writes the [`RenderPlan`].
+#[allow(clippy::too_many_arguments)] // Because each is a part of the scene the plan reads.
 pub fn analyse_scene(
     mut plan: ResMut<RenderPlan>,
     settings: Res<Settings>,
@@ -71,6 +82,7 @@ pub fn analyse_scene(
     materials: Query<&Material>,
     lights: Query<(), AnyLight>,
     area_lights: Query<(), AreaLight>,
+    observer: Option<Res<BinaryBvhObserver>>,
 ) {
     let s = &*settings;
     let triangles: usize = meshes.iter().map(|m| m.data.triangles.len()).sum();
@@ -105,6 +117,16 @@ pub fn analyse_scene(
             )
         },
         "no meshes in the scene",
+    );
+    p.binary_triangle_bvh = p.decide(
+        "keep binary triangle BVH",
+        p.triangle_bvh && observer.is_some(),
+        &format!("kept for {}", observer.as_ref().map_or("", |o| o.0)),
+        if p.triangle_bvh {
+            "no observer: dropped once collapsed, a render traverses the 8-wide BVH"
+        } else {
+            "no meshes in the scene"
+        },
     );
     p.sphere_bvh = p.decide(
         "build_sphere_bvh",

@@ -231,6 +231,7 @@ fn decode_textures_decodes_each_source_and_reports_unreadable_files() {
 fn build_triangle_bvh_puts_world_space_triangles_in_a_bvh() {
     let mut world = world![
         Settings::default(),
+        RenderPlan::default(),
         Materials::default(),
         SceneGeometry::default(),
         RenderStats::default()
@@ -257,11 +258,14 @@ fn build_triangle_bvh_puts_world_space_triangles_in_a_bvh() {
     assert_eq!(g.tri_normals, vec![[Vec3::Z; 3]]);
     assert_eq!(g.tri_texcoords[0][1], Vec2::X);
     assert_eq!(g.tri_material, vec![3]);
-    let bounds = g.tri_bvh.bounds();
+    let bounds = g.tri_wide.bounds;
     assert_eq!(
         (bounds.min, bounds.max),
         (Vec3::new(0.0, 0.0, -2.0), Vec3::new(1.0, 1.0, -2.0))
     );
+    assert_eq!(g.tri_wide.prims, vec![0]);
+    // No observer in the plan: the binary tree is dropped once collapsed.
+    assert!(g.tri_bvh.nodes.is_empty() && g.tri_bvh.prim_indices.is_empty());
     assert!(g.sphere_bvh.nodes.is_empty());
     assert_eq!(
         world
