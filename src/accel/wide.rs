@@ -205,9 +205,11 @@ impl WideBvh {
             return false;
         }
         let mut stack = Stack::new();
-        stack.push((0, 0.0));
+        // The node to visit next without a round trip through the stack: a node's
+        // nearest interior child (any-hit: its last, which would be popped first).
+        let mut next = Some((0, 0.0));
         let boxes = RayBoxes::new(ray);
-        while let Some((index, t_entry)) = stack.pop() {
+        while let Some((index, t_entry)) = next.take().or_else(|| stack.pop()) {
             // A box pushed earlier may now lie beyond the closest hit found since. With
             // the slab test's margin: a box entry rounded just past a hit on its face must
             // not hide a tie there, or the hit found would depend on the visiting order.
@@ -230,16 +232,21 @@ impl WideBvh {
                 while inner != 0 {
                     let lane = inner.trailing_zeros() as usize;
                     inner &= inner - 1;
-                    stack.push((node.child[lane], t[lane]));
+                    let entry = (node.child[lane], t[lane]);
+                    if inner == 0 {
+                        next = Some(entry);
+                    } else {
+                        stack.push(entry);
+                    }
                 }
                 continue;
             }
-            // Interior children met, nearest last so that it is popped first; most
-            // nodes have at most one, which needs no sort.
+            // Interior children met: the nearest next, the others pushed nearest last so
+            // that it is popped first; most nodes have at most one, which needs no sort.
             if inner & inner.wrapping_sub(1) == 0 {
                 if inner != 0 {
                     let lane = inner.trailing_zeros() as usize;
-                    stack.push((node.child[lane], t[lane]));
+                    next = Some((node.child[lane], t[lane]));
                 }
             } else {
                 let mut keys = [0u64; WIDTH];
@@ -256,10 +263,12 @@ impl WideBvh {
                     keys[i] = k;
                     n += 1;
                 }
-                for &k in &keys[..n] {
+                for &k in &keys[..n - 1] {
                     let lane = k as u32 as usize;
                     stack.push((node.child[lane], t[lane]));
                 }
+                let lane = keys[n - 1] as u32 as usize;
+                next = Some((node.child[lane], t[lane]));
             }
             // Leaves nearest first, after the interior children are queued.
             while leaves != 0 {
