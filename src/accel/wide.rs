@@ -248,6 +248,14 @@ impl WideBvh {
                     let lane = inner.trailing_zeros() as usize;
                     next = Some((node.child[lane], t[lane]));
                 }
+            } else if (inner & (inner - 1)).count_ones() == 1 {
+                // Two: one comparison.
+                let (a, b) = (inner.trailing_zeros(), 31 - inner.leading_zeros());
+                let (a, b) = (key(t[a as usize], a), key(t[b as usize], b));
+                let (near, far) = if a < b { (a, b) } else { (b, a) };
+                let (near, far) = (near as u32 as usize, far as u32 as usize);
+                stack.push((node.child[far], t[far]));
+                next = Some((node.child[near], t[near]));
             } else {
                 let mut keys = [0u64; WIDTH];
                 let mut n = 0;
