@@ -16,7 +16,7 @@
 use arrayvec::ArrayVec;
 use glam::Vec3;
 use multiversion::multiversion;
-use wide::{CmpEq, CmpLe, f32x8, u32x8};
+use wide::{f32x8, u32x8};
 
 use super::bvh::{Bvh, MAX_DEPTH};
 use super::triangle::{RayShear, TriangleHit, intersect_triangle_sheared};
