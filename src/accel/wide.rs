@@ -16,6 +16,7 @@
 use arrayvec::ArrayVec;
 use glam::Vec3;
 use multiversion::multiversion;
+use wide::{f32x8, u32x8};
 
 use super::bvh::{Bvh, MAX_DEPTH};
 use super::triangle::{RayShear, TriangleHit, intersect_triangle_sheared};
@@ -116,31 +117,43 @@ impl RayBoxes {
         }
     }
 
-    /// Entry distance of each child box the ray meets in [0, t_max], else +inf.
-    /// The same arithmetic as [`Aabb::intersect_ray`], lane by lane, in a loop
-    /// without branches so that it compiles to SIMD.
+    /// Entry distance of each child box (lanes the ray misses hold junk) and the
+    /// mask of lanes whose box the ray meets in [0, t_max]. The same arithmetic
+    /// as [`Aabb::intersect_ray`], lane by lane, in loops without branches so
+    /// that they compile to SIMD, and the mask through `wide` (a movemask: LLVM
+    /// turns the plain loop into a tangle of shuffles).
     #[inline(always)]
-    fn test(&self, node: &WideNode, t_max: f32) -> [f32; WIDTH] {
+    fn test(&self, node: &WideNode, t_max: f32) -> ([f32; WIDTH], u32) {
         let b = &node.bounds;
         let (o, inv) = (self.origin, self.inv_dir);
-        let mut out = [f32::INFINITY; WIDTH];
-        for (lane, out) in out.iter_mut().enumerate() {
+        let mut t_near = [0.0f32; WIDTH];
+        let mut t_far = [0.0f32; WIDTH];
+        for lane in 0..WIDTH {
             let near_x = (b[self.near[0]][lane] - o[0]) * inv[0];
             let near_y = (b[self.near[1]][lane] - o[1]) * inv[1];
             let near_z = (b[self.near[2]][lane] - o[2]) * inv[2];
             let far_x = (b[self.far[0]][lane] - o[0]) * inv[0];
             let far_y = (b[self.far[1]][lane] - o[1]) * inv[1];
             let far_z = (b[self.far[2]][lane] - o[2]) * inv[2];
-            let t_near = 0.0f32.max(near_x).max(near_y).max(near_z);
-            let t_far = t_max.min(far_x).min(far_y).min(far_z) * BOX_MARGIN;
-            *out = if t_near <= t_far {
-                t_near
-            } else {
-                f32::INFINITY
-            };
+            t_near[lane] = 0.0f32.max(near_x).max(near_y).max(near_z);
+            t_far[lane] = t_max.min(far_x).min(far_y).min(far_z) * BOX_MARGIN;
         }
-        out
+        let hit = f32x8::from(t_near).simd_le(f32x8::from(t_far));
+        (t_near, hit.to_bitmask())
     }
+}
+
+/// The lanes of `node` holding leaves.
+#[inline(always)]
+fn leaf_lanes(node: &WideNode) -> u32 {
+    !u32x8::from(node.count).simd_eq(u32x8::ZERO).to_bitmask() & ((1 << WIDTH) - 1)
+}
+
+/// Sort key of lane `lane` entered at `t` (not NaN, not below zero): ordered by t
+/// then lane, as the bits of a non-negative f32 are ordered like the f32.
+#[inline(always)]
+fn key(t: f32, lane: u32) -> u64 {
+    ((t.to_bits() as u64) << 32) | lane as u64
 }
 
 impl WideBvh {
@@ -203,9 +216,11 @@ impl WideBvh {
             return false;
         }
         let mut stack = Stack::new();
-        stack.push((0, 0.0));
+        // The node to visit next without a round trip through the stack: a node's
+        // nearest interior child (any-hit: its last, which would be popped first).
+        let mut next = Some((0, 0.0));
         let boxes = RayBoxes::new(ray);
-        while let Some((index, t_entry)) = stack.pop() {
+        while let Some((index, t_entry)) = next.take().or_else(|| stack.pop()) {
             // A box pushed earlier may now lie beyond the closest hit found since. With
             // the slab test's margin: a box entry rounded just past a hit on its face must
             // not hide a tie there, or the hit found would depend on the visiting order.
@@ -213,52 +228,85 @@ impl WideBvh {
                 continue;
             }
             let node = &self.nodes[index as usize];
-            let t = boxes.test(node, *t_max);
+            let (t, hit) = boxes.test(node, *t_max);
+            let leaf_mask = leaf_lanes(node);
+            let (mut leaves, mut inner) = (hit & leaf_mask, hit & !leaf_mask);
             if !NEAREST_FIRST {
-                for (lane, &entry) in t.iter().enumerate() {
+                while leaves != 0 {
+                    let lane = leaves.trailing_zeros() as usize;
+                    leaves &= leaves - 1;
                     let (child, count) = (node.child[lane], node.count[lane]);
-                    if entry != f32::INFINITY
-                        && count > 0
-                        && leaf(child as usize, count as usize, t_max)
-                    {
+                    if leaf(child as usize, count as usize, t_max) {
                         return true;
                     }
                 }
-                for (lane, &entry) in t.iter().enumerate() {
-                    if entry != f32::INFINITY && node.count[lane] == 0 {
-                        stack.push((node.child[lane], entry));
+                while inner != 0 {
+                    let lane = inner.trailing_zeros() as usize;
+                    inner &= inner - 1;
+                    let entry = (node.child[lane], t[lane]);
+                    if inner == 0 {
+                        next = Some(entry);
+                    } else {
+                        stack.push(entry);
                     }
                 }
                 continue;
             }
-            // Children met, nearest last so that it is popped first.
-            let mut order = [0usize; WIDTH];
-            let mut n = 0;
-            for lane in 0..WIDTH {
-                if t[lane] == f32::INFINITY {
-                    continue;
+            // Interior children met: the nearest next, the others pushed nearest last so
+            // that it is popped first; most nodes have at most one, which needs no sort.
+            if inner & inner.wrapping_sub(1) == 0 {
+                if inner != 0 {
+                    let lane = inner.trailing_zeros() as usize;
+                    next = Some((node.child[lane], t[lane]));
                 }
-                let mut k = n;
-                while k > 0 && t[order[k - 1]] < t[lane] {
-                    order[k] = order[k - 1];
-                    k -= 1;
+            } else if (inner & (inner - 1)).count_ones() == 1 {
+                // Two: one comparison.
+                let (a, b) = (inner.trailing_zeros(), 31 - inner.leading_zeros());
+                let (a, b) = (key(t[a as usize], a), key(t[b as usize], b));
+                let (near, far) = if a < b { (a, b) } else { (b, a) };
+                let (near, far) = (near as u32 as usize, far as u32 as usize);
+                stack.push((node.child[far], t[far]));
+                next = Some((node.child[near], t[near]));
+            } else {
+                let mut keys = [0u64; WIDTH];
+                let mut n = 0;
+                while inner != 0 {
+                    let lane = inner.trailing_zeros();
+                    inner &= inner - 1;
+                    let k = key(t[lane as usize], lane);
+                    let mut i = n;
+                    while i > 0 && keys[i - 1] < k {
+                        keys[i] = keys[i - 1];
+                        i -= 1;
+                    }
+                    keys[i] = k;
+                    n += 1;
                 }
-                order[k] = lane;
-                n += 1;
-            }
-            for &lane in &order[..n] {
-                let (child, count) = (node.child[lane], node.count[lane]);
-                if count == 0 {
-                    stack.push((child, t[lane]));
+                for &k in &keys[..n - 1] {
+                    let lane = k as u32 as usize;
+                    stack.push((node.child[lane], t[lane]));
                 }
+                let lane = keys[n - 1] as u32 as usize;
+                next = Some((node.child[lane], t[lane]));
             }
             // Leaves nearest first, after the interior children are queued.
-            for &lane in order[..n].iter().rev() {
+            while leaves != 0 {
+                let lane = if leaves & (leaves - 1) == 0 {
+                    leaves.trailing_zeros()
+                } else {
+                    let mut rest = leaves;
+                    let mut best = u64::MAX;
+                    while rest != 0 {
+                        let lane = rest.trailing_zeros();
+                        rest &= rest - 1;
+                        best = best.min(key(t[lane as usize], lane));
+                    }
+                    best as u32
+                };
+                leaves &= !(1 << lane);
+                let lane = lane as usize;
                 let (child, count) = (node.child[lane], node.count[lane]);
-                if count > 0
-                    && t[lane] <= *t_max * BOX_MARGIN
-                    && leaf(child as usize, count as usize, t_max)
-                {
+                if t[lane] <= *t_max * BOX_MARGIN && leaf(child as usize, count as usize, t_max) {
                     return true;
                 }
             }

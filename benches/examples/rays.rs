@@ -1,0 +1,55 @@
+//! Traces the anchors bench's torus ray sets (primary, incoherent, shadow)
+//! through glint's 8-wide BVH once each, for `scripts/callgrind_rays.sh`,
+//! which counts only the instructions inside [`trace_rays`]: building the
+//! mesh, the BVH and the rays is left out of the figure.
+//!   rays [TORUS_N] [RAYS]   (defaults 158, the 100k torus, and 65536 rays)
+
+use std::hint::black_box;
+
+use glint::accel::{Aabb, Bvh, Ray, SplitMethod, WideBvh};
+use glint_bench::{View, displaced_torus, incoherent_rays, primary_rays, shadow_rays};
+
+/// The queries the anchors bench times for glint: any-hit up to t = 1 for
+/// shadow rays, closest hit without a bound otherwise; returns the hits.
+#[inline(never)]
+fn trace_rays(wide: &WideBvh, rays: &[Ray], shadow: bool) -> u32 {
+    rays.iter()
+        .map(|r| {
+            if shadow {
+                wide.any_hit(r, 1.0, |_, _| true)
+            } else {
+                wide.closest_hit(r, f32::INFINITY).is_some()
+            }
+        })
+        .map(u32::from)
+        .sum()
+}
+
+fn main() {
+    let arg = |k: usize, default: usize| {
+        std::env::args()
+            .nth(k)
+            .and_then(|a| a.parse().ok())
+            .unwrap_or(default)
+    };
+    let (n, n_rays) = (arg(1, 158), arg(2, 1 << 16));
+    let tris = displaced_torus(n);
+    let bounds: Vec<Aabb> = tris.iter().map(|t| Aabb::from_points(t)).collect();
+    let wide = WideBvh::collapse(&Bvh::build(&bounds, SplitMethod::SahBinned), &tris);
+    let view = View::torus();
+    let side = (n_rays as f64).sqrt() as usize;
+    let sets = [
+        ("primary", primary_rays(&view, side, side)),
+        ("incoherent", incoherent_rays(&tris, &view, n_rays)),
+        ("shadow", shadow_rays(&tris, &view, n_rays)),
+    ];
+    for (name, rays) in &sets {
+        let hits = black_box(trace_rays(&wide, rays, *name == "shadow"));
+        println!("{name} {} rays {hits} hits", rays.len());
+    }
+    println!(
+        "{} triangles, {:.1} bytes/tri",
+        tris.len(),
+        wide.bytes() as f64 / tris.len() as f64
+    );
+}

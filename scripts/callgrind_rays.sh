@@ -1,0 +1,46 @@
+#!/usr/bin/env bash
+# Instructions per ray of glint's 8-wide BVH queries on the anchors bench's
+# torus (benches/examples/rays.rs: the same mesh, view and ray sets as
+# `cargo bench --bench anchors`), counted by callgrind (deterministic, unlike
+# wall time on a shared machine). Only the instructions inside the example's
+# `trace_rays` are collected (--toggle-collect), and callgrind dumps its
+# counters each time it enters it (--dump-before, which takes the exact
+# name: wildcards and --dump-after never fired here), so each ray set gets its own count, without mesh, BVH or ray
+# construction in it.
+#   scripts/callgrind_rays.sh [100k|1M|both] [RAYS]   (defaults 100k, 65536)
+# Under valgrind the AVX2 + FMA clone of the queries runs when the host CPU
+# has them, as natively.
+set -euo pipefail
+root="$(cd "$(dirname "$0")/.." && pwd)"
+which="${1:-100k}"
+rays="${2:-65536}"
+target="${CARGO_TARGET_DIR:-$root/target}"
+cargo build --release --manifest-path "$root/Cargo.toml" -p glint-bench --example rays >&2
+tmp="$(mktemp -d)"
+trap 'rm -rf "$tmp"' EXIT
+# Prints one line per ray set for the torus of 4 n^2 triangles.
+count() {
+  local label="$1" n="$2"
+  rm -f "$tmp"/cg.out*
+  valgrind --tool=callgrind --callgrind-out-file="$tmp/cg.out" \
+    --toggle-collect='rays::trace_rays' --dump-before='rays::trace_rays' \
+    "$target/release/examples/rays" "$n" "$rays" >"$tmp/stdout" 2>"$tmp/stderr"
+  # Dump k (taken on entering call k, so holding call k - 1) is primary for
+  # k = 2, incoherent for k = 3; the final profile, cg.out, is shadow.
+  local k=1 set nrays hits ir file
+  while read -r set nrays _ hits _; do
+    k=$((k + 1))
+    file="$tmp/cg.out.$k"
+    ((k < 4)) || file="$tmp/cg.out"
+    ir="$(grep -E '^(summary|totals):' "$file" | head -1 | awk '{print $2}')"
+    printf 'torus%-5s %-10s %7d rays %7d hits %6d instructions/ray\n' \
+      "$label" "$set" "$nrays" "$hits" $((ir / nrays))
+  done < <(grep ' rays ' "$tmp/stdout")
+  grep 'bytes/tri' "$tmp/stdout"
+}
+case "$which" in
+  100k) count 100k 158 ;;
+  1M) count 1M 500 ;;
+  both) count 100k 158; count 1M 500 ;;
+  *) echo "usage: $0 [100k|1M|both] [RAYS]" >&2; exit 2 ;;
+esac
