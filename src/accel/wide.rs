@@ -272,29 +272,22 @@ impl WideBvh {
         let mut best: Option<(u32, TriangleHit)> = None;
         let limit = t_max;
         let mut t_max = t_max;
+        // Past the best t so far by more than the rounding of the triangle test's scaled
+        // early-out (t_scaled against bound * det, three roundings): then every triangle
+        // with t at or below the best passes it whatever the order of the leaves, and the
+        // comparison below alone decides, so the hit is the least (t, index) of the
+        // triangles hit before `limit`. It changes only with the best hit.
+        let mut bound = limit;
         self.traverse::<true>(ray, &mut t_max, |group, count, t_max| {
-            // Past the best t so far by more than the rounding of the triangle test's
-            // scaled early-out (t_scaled against bound * det, three roundings): then
-            // every triangle with t at or below the best passes it whatever the order
-            // of the leaves, and the comparison below alone decides, so the hit is
-            // the least (t, index) of the triangles hit before `limit`.
-            let bound = |best: &Option<_>, t_max: f32| {
-                if best.is_some() {
-                    t_max.next_up().next_up().next_up().min(limit)
-                } else {
-                    limit
-                }
-            };
             for i in 0..groups_for(count) {
                 let g = &self.leaves.groups[group + i];
                 // The bound only falls within the group, so the group's first bound
                 // lets through every lane a later, lower one accepts.
-                let mut lanes = pre.candidates(g, bound(&best, *t_max)) & lane_mask(i, count);
+                let mut lanes = pre.candidates(g, bound) & lane_mask(i, count);
                 while lanes != 0 {
                     let lane = lanes.trailing_zeros() as usize;
                     lanes &= lanes - 1;
                     let [a, b, c] = g.triangle(lane);
-                    let bound = bound(&best, *t_max);
                     let Some(h) = intersect_triangle_sheared(&shear, ray.origin, a, b, c, bound)
                     else {
                         continue;
@@ -302,6 +295,7 @@ impl WideBvh {
                     let p = self.prims[self.leaves.first[group + i] as usize + lane];
                     if best.is_none_or(|(bp, bh)| h.t < bh.t || (h.t == bh.t && p < bp)) {
                         *t_max = h.t;
+                        bound = h.t.next_up().next_up().next_up().min(limit);
                         best = Some((p, h));
                     }
                 }
