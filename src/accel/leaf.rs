@@ -203,8 +203,8 @@ impl RayLeaf {
         let [ox, oy, oz] = self.origin;
         let (sx, sy, sz) = (self.sx, self.sy, self.sz);
         let (a, b, c) = (&g.v[0], &g.v[1], &g.v[2]);
-        let mut keep = [false; LANES];
-        for (lane, keep) in keep.iter_mut().enumerate() {
+        let mut bits = [0u32; LANES];
+        for (lane, bit) in bits.iter_mut().enumerate() {
             let (a_x, a_y, a_z) = (a[kx][lane] - ox, a[ky][lane] - oy, a[kz][lane] - oz);
             let (b_x, b_y, b_z) = (b[kx][lane] - ox, b[ky][lane] - oy, b[kz][lane] - oz);
             let (c_x, c_y, c_z) = (c[kx][lane] - ox, c[ky][lane] - oy, c[kz][lane] - oz);
@@ -227,11 +227,10 @@ impl RayLeaf {
             } else {
                 (t_scaled <= 0.0) | (t_scaled >= bound)
             };
-            *keep = zero | !(mixed | (det == 0.0) | outside);
+            let keep = zero | !(mixed | (det == 0.0) | outside);
+            *bit = (keep as u32) << lane;
         }
-        keep.iter()
-            .enumerate()
-            .fold(0, |mask, (lane, &k)| mask | (k as u32) << lane)
+        bits.iter().fold(0, |mask, &bit| mask | bit)
     }
 }
 
