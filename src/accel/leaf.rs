@@ -103,21 +103,24 @@ impl LeafTris {
         }
         // Groups in slot order, as the triangles were: neighbouring leaves stay close.
         leaves.sort_unstable_by_key(|&(i, lane)| nodes[i].child[lane]);
-        let mut out = LeafTris::default();
+        let groups: usize = leaves
+            .iter()
+            .map(|&(i, lane)| groups_for(nodes[i].count[lane] as usize))
+            .sum();
+        let mut out = LeafTris {
+            groups: Vec::with_capacity(groups),
+            first: Vec::with_capacity(groups),
+        };
         for (i, lane) in leaves {
             let (slot, count) = (nodes[i].child[lane] as usize, nodes[i].count[lane]);
             (nodes[i].child[lane], nodes[i].count[lane]) = leaf_lane(out.groups.len(), count);
-            for (g, chunk) in (slot..slot + count as usize)
-                .collect::<Vec<_>>()
-                .chunks(LANES)
-                .enumerate()
-            {
+            for start in (slot..slot + count as usize).step_by(LANES) {
                 let mut group = TriGroup::PADDING;
-                for (lane, &k) in chunk.iter().enumerate() {
-                    group.set_triangle(lane, positions[prims[k] as usize]);
+                for k in start..(start + LANES).min(slot + count as usize) {
+                    group.set_triangle(k - start, positions[prims[k] as usize]);
                 }
                 out.groups.push(group);
-                out.first.push((slot + g * LANES) as u32);
+                out.first.push(start as u32);
             }
         }
         out
