@@ -10,6 +10,7 @@
 //! - [`bvh`] and [`build`]: a flat depth-first BVH with binned-SAH and median builders.
 //! - [`traverse`]: closest-hit and any-hit traversal of that BVH.
 //! - [`wide`]: that BVH collapsed to 8-wide nodes with triangles in leaf order, for the render.
+//! - [`leaf`]: the wide BVH's leaf triangles in SIMD groups, with a vectorised prefilter.
 //! - [`instance`]: a two-level BVH, one wide BVH per mesh shared by its instances.
 
 use glam::Vec3;
@@ -18,6 +19,7 @@ pub mod aabb;
 pub mod build;
 pub mod bvh;
 pub mod instance;
+pub mod leaf;
 pub mod sphere;
 pub mod traverse;
 pub mod triangle;

@@ -3,8 +3,9 @@
 //! boxes are stored structure-of-arrays, so that one slab test covers all eight
 //! (plain `[f32; 8]` lanes that the compiler vectorises, one AVX2 register in the
 //! AVX2 clone of the queries; no `unsafe`), and the
-//! triangles copied in leaf order, so a leaf reads consecutive memory instead of
-//! going through the primitive indices.
+//! triangles copied in leaf order, structure-of-arrays ([`super::leaf`]), so a leaf
+//! reads consecutive memory instead of going through the primitive indices and tests
+//! its triangles' early-outs in one vectorised pass.
 //!
 //! The slab test is the binary tree's (Ize 2013: near and far planes chosen by
 //! the sign of the inverse direction, NaN bounds ignored, exit distance enlarged
@@ -19,6 +20,7 @@ use multiversion::multiversion;
 use wide::{f32x8, u32x8};
 
 use super::bvh::{Bvh, MAX_DEPTH};
+use super::leaf::{LeafTris, RayLeaf, groups_for, lane_mask};
 use super::triangle::{RayShear, TriangleHit, intersect_triangle_sheared};
 use super::{Aabb, BOX_MARGIN, Ray};
 
@@ -36,7 +38,7 @@ const EMPTY: u32 = u32::MAX;
 pub struct WideNode {
     /// Child boxes: min x, y, z then max x, y, z, one lane per child.
     pub bounds: [[f32; WIDTH]; 6],
-    /// Interior child: its node index. Leaf child: its first slot in `tris`. Unused: `u32::MAX`.
+    /// Interior child: its node index. Leaf child: its first group in `leaves`. Unused: `u32::MAX`.
     pub child: [u32; WIDTH],
     /// Triangles of a leaf child; 0 for an interior or unused child.
     pub count: [u32; WIDTH],
@@ -78,9 +80,9 @@ impl WideNode {
 pub struct WideBvh {
     /// Nodes, each after its parent; empty for no triangles.
     pub nodes: Vec<WideNode>,
-    /// Triangle vertices in leaf order.
-    pub tris: Vec<[Vec3; 3]>,
-    /// The caller's index of each triangle in `tris`.
+    /// Triangle vertices in leaf order, in groups of `leaf::LANES`.
+    pub leaves: LeafTris,
+    /// The caller's index of each triangle slot, in leaf order.
     pub prims: Vec<u32>,
     /// Bounds of everything.
     pub bounds: Aabb,
@@ -178,10 +180,10 @@ impl WideBvh {
         }
         let mut nodes = Vec::with_capacity(bvh.nodes.len() / 2 + 1);
         let depth = collapse_node(bvh, 0, 0, &mut nodes).1;
-        let tris = prims.iter().map(|&p| positions[p as usize]).collect();
+        let leaves = LeafTris::build(&mut nodes, &prims, positions);
         WideBvh {
             nodes,
-            tris,
+            leaves,
             prims,
             bounds: bvh.bounds(),
             depth,
@@ -191,7 +193,7 @@ impl WideBvh {
     /// Bytes held: nodes, triangles and indices.
     pub fn bytes(&self) -> usize {
         size_of_val(self.nodes.as_slice())
-            + size_of_val(self.tris.as_slice())
+            + self.leaves.bytes()
             + size_of_val(self.prims.as_slice())
     }
 
@@ -325,29 +327,36 @@ impl WideBvh {
     #[inline(always)]
     fn closest_hit_inlined(&self, ray: &Ray, t_max: f32) -> Option<(u32, TriangleHit)> {
         let shear = RayShear::new(ray);
+        let pre = RayLeaf::new(ray, &shear);
         let mut best: Option<(u32, TriangleHit)> = None;
         let limit = t_max;
         let mut t_max = t_max;
-        self.traverse::<true>(ray, &mut t_max, |first, count, t_max| {
-            for k in first..first + count {
-                let [a, b, c] = self.tris[k];
-                // Past the best t so far by more than the rounding of the triangle test's
-                // scaled early-out (t_scaled against bound * det, three roundings): then
-                // every triangle with t at or below the best passes it whatever the order
-                // of the leaves, and the comparison below alone decides, so the hit is
-                // the least (t, index) of the triangles hit before `limit`.
-                let bound = if best.is_some() {
-                    t_max.next_up().next_up().next_up().min(limit)
-                } else {
-                    limit
-                };
-                let Some(h) = intersect_triangle_sheared(&shear, ray.origin, a, b, c, bound) else {
-                    continue;
-                };
-                let p = self.prims[k];
-                if best.is_none_or(|(bp, bh)| h.t < bh.t || (h.t == bh.t && p < bp)) {
-                    *t_max = h.t;
-                    best = Some((p, h));
+        // Past the best t so far by more than the rounding of the triangle test's scaled
+        // early-out (t_scaled against bound * det, three roundings): then every triangle
+        // with t at or below the best passes it whatever the order of the leaves, and the
+        // comparison below alone decides, so the hit is the least (t, index) of the
+        // triangles hit before `limit`. It changes only with the best hit.
+        let mut bound = limit;
+        self.traverse::<true>(ray, &mut t_max, |group, count, t_max| {
+            for i in 0..groups_for(count) {
+                let g = &self.leaves.groups[group + i];
+                // The bound only falls within the group, so the group's first bound
+                // lets through every lane a later, lower one accepts.
+                let mut lanes = pre.candidates(g, bound) & lane_mask(i, count);
+                while lanes != 0 {
+                    let lane = lanes.trailing_zeros() as usize;
+                    lanes &= lanes - 1;
+                    let [a, b, c] = g.triangle(lane);
+                    let Some(h) = intersect_triangle_sheared(&shear, ray.origin, a, b, c, bound)
+                    else {
+                        continue;
+                    };
+                    let p = self.prims[self.leaves.first[group + i] as usize + lane];
+                    if best.is_none_or(|(bp, bh)| h.t < bh.t || (h.t == bh.t && p < bp)) {
+                        *t_max = h.t;
+                        bound = h.t.next_up().next_up().next_up().min(limit);
+                        best = Some((p, h));
+                    }
                 }
             }
             false
@@ -375,31 +384,39 @@ impl WideBvh {
         mut visit: impl FnMut(u32, &TriangleHit) -> bool,
     ) -> bool {
         let shear = RayShear::new(ray);
+        let pre = RayLeaf::new(ray, &shear);
         let mut t = t_max;
-        self.traverse::<false>(ray, &mut t, |first, count, _| {
-            (first..first + count).any(|k| {
-                let [a, b, c] = self.tris[k];
-                intersect_triangle_sheared(&shear, ray.origin, a, b, c, t_max)
-                    .is_some_and(|h| visit(self.prims[k], &h))
-            })
+        self.traverse::<false>(ray, &mut t, |group, count, _| {
+            for i in 0..groups_for(count) {
+                let g = &self.leaves.groups[group + i];
+                let mut lanes = pre.candidates(g, t_max) & lane_mask(i, count);
+                while lanes != 0 {
+                    let lane = lanes.trailing_zeros() as usize;
+                    lanes &= lanes - 1;
+                    let [a, b, c] = g.triangle(lane);
+                    if intersect_triangle_sheared(&shear, ray.origin, a, b, c, t_max).is_some_and(
+                        |h| visit(self.prims[self.leaves.first[group + i] as usize + lane], &h),
+                    ) {
+                        return true;
+                    }
+                }
+            }
+            false
         })
     }
 
     /// Checks every structural invariant against the triangles it was built from;
     /// Err names the first violation. Invariants: `prims` is a permutation of
-    /// `0..positions.len()` and `tris[k] == positions[prims[k]]`; every node is
-    /// reached once from the root and after its parent; leaves are non-empty and
-    /// cover `tris` without gaps or overlap; a child box contains its node's
-    /// children's boxes, a leaf box its triangles; `bounds` contains the root's
+    /// `0..positions.len()`; every node is reached once from the root and after its
+    /// parent; leaves are non-empty, own their triangle groups and cover the slots of
+    /// `prims` without gaps or overlap, slot `k` holding `positions[prims[k]]` and
+    /// padding lanes NaN; every group belongs to a leaf; a child box contains its
+    /// node's children's boxes, a leaf box its triangles; `bounds` contains the root's
     /// children; unused slots have no box; no node lies deeper than `depth`.
     pub fn validate(&self, positions: &[[Vec3; 3]]) -> Result<(), String> {
         let n = positions.len();
-        if self.prims.len() != n || self.tris.len() != n {
-            return Err(format!(
-                "{} prims and {} tris for {n} triangles",
-                self.prims.len(),
-                self.tris.len()
-            ));
+        if self.prims.len() != n {
+            return Err(format!("{} prims for {n} triangles", self.prims.len()));
         }
         if self.nodes.is_empty() {
             return if n == 0 {
@@ -414,10 +431,8 @@ impl WideBvh {
                 return Err(format!("prims[{k}] = {p} is out of range or repeated"));
             };
             *s = true;
-            if self.tris[k] != positions[p as usize] {
-                return Err(format!("tris[{k}] is not triangle {p}"));
-            }
         }
+        let mut used = vec![false; self.leaves.groups.len()];
         let mut reached = vec![false; self.nodes.len()];
         let mut covered = vec![false; n];
         if self.depth > MAX_DEPTH {
@@ -454,19 +469,21 @@ impl WideBvh {
                     stack.push((c, b, depth + 1));
                     continue;
                 }
-                let (first, count) = (child as usize, count as usize);
-                if first + count > n {
-                    return Err(format!("node {i} lane {lane}: leaf past the end"));
-                }
-                let slots = first..first + count;
-                for (k, tri) in slots.clone().zip(&self.tris[slots]) {
-                    if std::mem::replace(&mut covered[k], true) {
-                        return Err(format!("triangle slot {k} in two leaves"));
+                let leaf = |k: usize, tri: [Vec3; 3]| {
+                    if k >= n || std::mem::replace(&mut covered[k], true) {
+                        return Err(format!("triangle slot {k} past the end or in two leaves"));
                     }
-                    if !b.contains_box(&Aabb::from_points(tri)) {
+                    if tri != positions[self.prims[k] as usize] {
+                        return Err(format!("slot {k} is not triangle {}", self.prims[k]));
+                    }
+                    if !b.contains_box(&Aabb::from_points(&tri)) {
                         return Err(format!("node {i} lane {lane}: slot {k} outside the box"));
                     }
-                }
+                    Ok(())
+                };
+                self.leaves
+                    .validate_leaf(child as usize, count as usize, &mut used, leaf)
+                    .map_err(|e| format!("node {i} lane {lane}: {e}"))?;
             }
         }
         if let Some(i) = reached.iter().position(|r| !r) {
@@ -474,6 +491,9 @@ impl WideBvh {
         }
         if let Some(k) = covered.iter().position(|c| !c) {
             return Err(format!("triangle slot {k} is in no leaf"));
+        }
+        if let Some(g) = used.iter().position(|u| !u) {
+            return Err(format!("triangle group {g} is in no leaf"));
         }
         Ok(())
     }

@@ -102,7 +102,17 @@ fn validate_catches_a_shrunken_box_and_a_wrong_triangle() {
     bad.nodes[0].bounds[3][lane] = bad.nodes[0].bounds[0][lane];
     assert!(bad.validate(&tris).is_err());
     let mut bad = wide.clone();
-    bad.tris.swap(0, 1);
+    bad.leaves.groups[0].v[0][0][0] += 1.0;
+    assert!(bad.validate(&tris).is_err());
+    // A padding lane that could hit: a copy of lane 0's triangle.
+    let mut bad = wide.clone();
+    let g = bad.nodes.iter().find_map(|n| {
+        (0..WIDTH).find_map(|l| (1..4).contains(&n.count[l]).then_some(n.child[l] as usize))
+    });
+    let g = &mut bad.leaves.groups[g.unwrap()];
+    for axis in g.v.iter_mut().flatten() {
+        axis[3] = axis[0];
+    }
     assert!(bad.validate(&tris).is_err());
 }
 
