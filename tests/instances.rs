@@ -118,7 +118,7 @@ fn without_acceleration_shared_meshes_are_flattened() {
     );
     // Every triangle of every copy, in the one leaf, and the same image.
     assert_eq!(g.tri_positions.len(), geometry(&copied).tri_positions.len());
-    assert_eq!(g.tri_bvh.nodes.len(), 1);
+    assert_eq!(g.tri_wide.nodes.len(), 1);
     for (x, y) in (0..n).flat_map(|y| (0..n).map(move |x| (x, y))) {
         assert_eq!(shared.film().pixel(x, y), copied.film().pixel(x, y));
     }
