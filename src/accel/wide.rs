@@ -338,28 +338,22 @@ impl WideBvh {
         // triangles hit before `limit`. It changes only with the best hit.
         let mut bound = limit;
         self.traverse::<true>(ray, &mut t_max, |group, count, t_max| {
-            for i in 0..groups_for(count) {
-                let g = &self.leaves.groups[group + i];
-                // The bound only falls within the group, so the group's first bound
-                // lets through every lane a later, lower one accepts.
-                let mut lanes = pre.candidates(g, bound) & lane_mask(i, count);
-                while lanes != 0 {
-                    let lane = lanes.trailing_zeros() as usize;
-                    lanes &= lanes - 1;
-                    let [a, b, c] = g.triangle(lane);
-                    let Some(h) = intersect_triangle_sheared(&shear, ray.origin, a, b, c, bound)
-                    else {
-                        continue;
-                    };
-                    let p = self.prims[self.leaves.first[group + i] as usize + lane];
+            self.leaf_hits(
+                ray,
+                &shear,
+                &pre,
+                group,
+                count,
+                &mut bound,
+                |p, h, bound| {
                     if best.is_none_or(|(bp, bh)| h.t < bh.t || (h.t == bh.t && p < bp)) {
                         *t_max = h.t;
-                        bound = h.t.next_up().next_up().next_up().min(limit);
-                        best = Some((p, h));
+                        *bound = h.t.next_up().next_up().next_up().min(limit);
+                        best = Some((p, *h));
                     }
-                }
-            }
-            false
+                    false
+                },
+            )
         });
         best
     }
@@ -385,24 +379,48 @@ impl WideBvh {
     ) -> bool {
         let shear = RayShear::new(ray);
         let pre = RayLeaf::new(ray, &shear);
-        let mut t = t_max;
+        let (mut t, mut bound) = (t_max, t_max);
         self.traverse::<false>(ray, &mut t, |group, count, _| {
-            for i in 0..groups_for(count) {
-                let g = &self.leaves.groups[group + i];
-                let mut lanes = pre.candidates(g, t_max) & lane_mask(i, count);
-                while lanes != 0 {
-                    let lane = lanes.trailing_zeros() as usize;
-                    lanes &= lanes - 1;
-                    let [a, b, c] = g.triangle(lane);
-                    if intersect_triangle_sheared(&shear, ray.origin, a, b, c, t_max).is_some_and(
-                        |h| visit(self.prims[self.leaves.first[group + i] as usize + lane], &h),
-                    ) {
-                        return true;
-                    }
+            self.leaf_hits(ray, &shear, &pre, group, count, &mut bound, |p, h, _| {
+                visit(p, h)
+            })
+        })
+    }
+
+    /// Tests the triangles of the leaf at `group` with `count` triangles: the SoA
+    /// prefilter, then the exact test on each lane it keeps, both against `*bound`;
+    /// `hit(prim, hit, bound)` may lower the bound and returns true to stop.
+    #[allow(clippy::too_many_arguments)]
+    #[inline(always)]
+    fn leaf_hits(
+        &self,
+        ray: &Ray,
+        shear: &RayShear,
+        pre: &RayLeaf,
+        group: usize,
+        count: usize,
+        bound: &mut f32,
+        mut hit: impl FnMut(u32, &TriangleHit, &mut f32) -> bool,
+    ) -> bool {
+        for i in 0..groups_for(count) {
+            let g = &self.leaves.groups[group + i];
+            // The bound only falls within the group, so the group's first bound lets
+            // through every lane a later, lower one accepts.
+            let mut lanes = pre.candidates(g, *bound) & lane_mask(i, count);
+            while lanes != 0 {
+                let lane = lanes.trailing_zeros() as usize;
+                lanes &= lanes - 1;
+                let [a, b, c] = g.triangle(lane);
+                let Some(h) = intersect_triangle_sheared(shear, ray.origin, a, b, c, *bound) else {
+                    continue;
+                };
+                let p = self.prims[self.leaves.first[group + i] as usize + lane];
+                if hit(p, &h, bound) {
+                    return true;
                 }
             }
-            false
-        })
+        }
+        false
     }
 
     /// Checks every structural invariant against the triangles it was built from;
