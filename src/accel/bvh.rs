@@ -95,6 +95,45 @@ impl Bvh {
         }
     }
 
+    /// FNV-1a over every node (a zero's sign ignored: no box test sees it) and the
+    /// primitive order: equal for equal trees, so a build change that alters the tree shows.
+    pub fn tree_hash(&self) -> u64 {
+        let mut h: u64 = 0xcbf2_9ce4_8422_2325;
+        let mut eat = |x: u32| {
+            for byte in x.to_le_bytes() {
+                h = (h ^ u64::from(byte)).wrapping_mul(0x0000_0100_0000_01b3);
+            }
+        };
+        for n in &self.nodes {
+            for v in n.min.iter().chain(&n.max) {
+                eat((v + 0.0).to_bits());
+            }
+            eat(n.offset);
+            eat(n.count);
+        }
+        for &p in &self.prim_indices {
+            eat(p);
+        }
+        h
+    }
+
+    /// SAH cost with unit node and primitive costs, relative to the root's area: the
+    /// tree's quality, for comparing builds (0 for no nodes).
+    pub fn sah_cost(&self) -> f64 {
+        let Some(root) = self.nodes.first() else {
+            return 0.0;
+        };
+        let cost: f64 = self
+            .nodes
+            .iter()
+            .map(|n| {
+                let a = n.bounds().surface_area() as f64;
+                if n.is_leaf() { a * n.count as f64 } else { a }
+            })
+            .sum();
+        cost / root.bounds().surface_area() as f64
+    }
+
     /// Checks every structural invariant; Err names the first violation.
     ///
     /// Invariants: `prim_indices` is a permutation of `0..bounds.len()`; nodes
@@ -336,6 +375,22 @@ mod tests {
     }
 
     #[test]
+    fn sah_cost_counts_leaf_primitives_by_area() {
+        let unit = |x: f32| Aabb {
+            min: Vec3::new(x, 0.0, 0.0),
+            max: Vec3::new(x + 1.0, 1.0, 1.0),
+        };
+        // One leaf of three: three primitive tests over the root's own area.
+        assert_eq!(Bvh::single_leaf(&[unit(0.0); 3]).sah_cost(), 3.0);
+        assert_eq!(Bvh::default().sah_cost(), 0.0);
+        // 64 boxes in a row: the SAH tree costs far less than testing all 64 in one
+        // leaf, and more than the root alone.
+        let row: Vec<Aabb> = (0..64).map(|i| unit(2.0 * i as f32)).collect();
+        let cost = Bvh::build(&row, SplitMethod::SahBinned).sah_cost();
+        assert!(cost > 1.0 && cost < 16.0, "{cost}");
+    }
+
+    #[test]
     fn sah_separates_clusters() {
         // Two tight clusters far apart: the SAH root split separates them.
         let mut rng = Lcg(9);
@@ -373,28 +428,6 @@ mod tests {
         }
     }
 
-    /// FNV-1a over every node (a zero's sign ignored: no box test sees it)
-    /// and the primitive order.
-    fn tree_hash(b: &Bvh) -> u64 {
-        let mut h: u64 = 0xcbf2_9ce4_8422_2325;
-        let mut eat = |x: u32| {
-            for byte in x.to_le_bytes() {
-                h = (h ^ u64::from(byte)).wrapping_mul(0x0000_0100_0000_01b3);
-            }
-        };
-        for n in &b.nodes {
-            for v in n.min.iter().chain(&n.max) {
-                eat((v + 0.0).to_bits());
-            }
-            eat(n.offset);
-            eat(n.count);
-        }
-        for &p in &b.prim_indices {
-            eat(p);
-        }
-        h
-    }
-
     #[test]
     fn sah_tree_matches_reference_for_any_thread_count() {
         // Hashes of the trees the first builder (index array, no PrimRefs)
@@ -421,7 +454,7 @@ mod tests {
                     .install(|| Bvh::build(bounds, SplitMethod::SahBinned));
                 assert_eq!(b.validate(bounds), Ok(()));
                 assert_eq!(
-                    tree_hash(&b),
+                    b.tree_hash(),
                     *want,
                     "{} prims, {threads} threads",
                     bounds.len()
