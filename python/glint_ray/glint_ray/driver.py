@@ -43,17 +43,23 @@ def _die_with_parent() -> None:
         pass
 
 
+def _write_files(folder: str, prefix: str, datas) -> list[str]:
+    """Writes each of ``datas`` to ``folder/PREFIXnnnnn.exr``; returns the paths in order."""
+    files = []
+    for k, data in enumerate(datas):
+        files.append(os.path.join(folder, f"{prefix}{k:05}.exr"))
+        with open(files[-1], "wb") as f:
+            f.write(data)
+    return files
+
+
 def run_glint(glint: str, args: list[str], inputs: list[bytes] = ()) -> bytes:
     """Runs ``glint ARGS -o OUT`` in a fresh folder holding ``inputs`` as ``in*.exr``
     (appended to ARGS); returns OUT's bytes. Raises ``GlintFailed`` on exit code 1 and
     ``PartKilled`` on any other failure."""
     folder = tempfile.mkdtemp(prefix="glint-ray-")
     try:
-        files = []
-        for k, data in enumerate(inputs):
-            files.append(os.path.join(folder, f"in{k:05}.exr"))
-            with open(files[-1], "wb") as f:
-                f.write(data)
+        files = _write_files(folder, "in", inputs)
         out = os.path.join(folder, "out.exr")
         cmd = [glint, *args, *files, "-q", "-o", out]
         done = subprocess.run(cmd, capture_output=True, text=True, preexec_fn=_die_with_parent)
@@ -193,11 +199,7 @@ def merge_locally(glint: str, parts: list[bytes], output: str, quiet: bool) -> i
     """``glint merge`` of the part files into the image ``output``; its exit code."""
     folder = tempfile.mkdtemp(prefix="glint-ray-merge-")
     try:
-        files = []
-        for k, data in enumerate(parts):
-            files.append(os.path.join(folder, f"part{k:05}.exr"))
-            with open(files[-1], "wb") as f:
-                f.write(data)
+        files = _write_files(folder, "part", parts)
         merge = [glint, "merge", *files, "-o", output]
         if quiet:
             merge.append("-q")
