@@ -1,7 +1,7 @@
 #!/usr/bin/env bash
 # The README's screenshot of `glint view`: the Cornell box, a traced mirror pixel, the
 # view orbited to the side. Needs Xvfb, xdotool and ImageMagick (apt-get install -y xvfb
-# xdotool imagemagick libgl1-mesa-dri) and a glint built with `--features view`.
+# xdotool imagemagick libgl1-mesa-dri) and a glint built with the `view` feature (the default).
 # Usage: scripts/view_screenshot.sh path/to/glint docs/images/view_cornell.png
 set -euo pipefail
 BIN=$1 OUT=$2

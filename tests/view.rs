@@ -1,6 +1,5 @@
 //! `glint view` without a window: egui_kittest drives the viewer's UI headless, and the
-//! render thread renders for real. Needs the `view` feature (`cargo test --release
-//! --features view --test view`).
+//! render thread renders for real. Needs the `view` feature, on by default (`cargo test --release --test view`).
 #![allow(dead_code)]
 
 #[path = "../src/bin/glint/view/mod.rs"]
@@ -187,7 +186,7 @@ fn a_saved_scene_renders_in_batch_the_image_the_viewer_shows() {
 }
 
 /// Time to the first frame and frame time while orbiting at 800x600, for the README:
-/// `cargo test --release --features view --test view -- --ignored --nocapture`.
+/// `cargo test --release --test view -- --ignored --nocapture`.
 #[test]
 #[ignore = "a measurement, not a check"]
 fn timings_at_800x600() {

@@ -30,7 +30,7 @@ pub enum Command {
     /// one image, bit-identical to a single render of all their samples.
     Merge(MergeArgs),
     /// Open a window on a scene or model: progressive render, camera, settings, and
-    /// pixel tracing in 3D (needs the `view` feature: `cargo run --release --features view`).
+    /// pixel tracing in 3D (the `view` feature, on by default).
     View(SceneArgs),
     /// Run the numerical stress suite (extreme scales, edges, grazing rays, degenerate
     /// input...) and print a table of measurements; fails if any case fails.

@@ -98,7 +98,7 @@ fn view(args: &cli::SceneArgs) -> CliResult<()> {
 #[cfg(not(feature = "view"))]
 fn view(_: &cli::SceneArgs) -> CliResult<()> {
     Err(CliError::Failed(
-        "this glint was built without the viewer: run `cargo run --release --features view -- view SCENE`".into(),
+        "this glint was built without the viewer (`--no-default-features`): run `cargo run --release --features view -- view SCENE`".into(),
     ))
 }
 
