@@ -7,6 +7,7 @@
 
 use std::time::Instant;
 
+use glint::accel::leaf::LANES;
 use glint::accel::{Aabb, Bvh, SplitMethod};
 use glint_bench::displaced_torus;
 
@@ -32,13 +33,27 @@ fn main() {
     }
     ms.sort_by(f64::total_cmp);
     println!(
-        "{} triangles, {threads} threads: build {:.1} ms median [{:.1}-{:.1}], {} nodes, SAH cost {:.3}, hash {:016x}",
+        "{} triangles, {threads} threads: build {:.1} ms median [{:.1}-{:.1}], {} nodes, {} leaves, SAH cost {:.3} ({:.3} counting leaves in groups of {LANES}), hash {:016x}",
         tris.len(),
         ms[ms.len() / 2],
         ms[0],
         ms[ms.len() - 1],
         bvh.nodes.len(),
+        bvh.leaf_count(),
         bvh.sah_cost(),
+        group_sah_cost(&bvh),
         bvh.tree_hash()
     );
+}
+
+/// [`Bvh::sah_cost`] with a leaf costing its `LANES`-triangle groups instead of its
+/// triangles: what the wide BVH's leaves test.
+fn group_sah_cost(bvh: &Bvh) -> f64 {
+    let area = |n: &glint::accel::BvhNode| n.bounds().surface_area() as f64;
+    let cost: f64 = bvh
+        .nodes
+        .iter()
+        .map(|n| area(n) * n.count.div_ceil(LANES as u32).max(1) as f64)
+        .sum();
+    cost / bvh.nodes.first().map_or(1.0, area)
 }
