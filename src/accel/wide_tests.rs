@@ -355,3 +355,32 @@ fn exact_ties_on_box_faces_go_to_the_lowest_index() {
         "{checked} rays checked, {ties} exact ties"
     );
 }
+
+#[test]
+fn each_triangle_reads_its_own_vertices_from_the_leaves() {
+    for tris in [random_tris(1, 8), random_tris(2000, 9), grid(9)] {
+        let (_, wide) = both(&tris, SplitMethod::SahBinned);
+        for (p, tri) in tris.iter().enumerate() {
+            assert_eq!(wide.triangle(p as u32), *tri);
+        }
+        assert_eq!(wide.positions(), tris);
+    }
+    // Without acceleration: one leaf of many groups.
+    let tris = random_tris(37, 10);
+    let bounds: Vec<Aabb> = tris.iter().map(|t| Aabb::from_points(t)).collect();
+    let wide = WideBvh::collapse(&Bvh::single_leaf(&bounds), &tris);
+    wide.validate(&tris).unwrap();
+    assert_eq!(wide.positions(), tris);
+}
+
+#[test]
+fn validate_catches_a_wrong_prim_lane() {
+    let tris = random_tris(300, 11);
+    let (_, wide) = both(&tris, SplitMethod::SahBinned);
+    let mut bad = wide.clone();
+    bad.prim_lanes.swap(0, 1);
+    assert!(bad.validate(&tris).is_err());
+    let mut bad = wide.clone();
+    bad.prim_lanes.pop();
+    assert!(bad.validate(&tris).is_err());
+}
