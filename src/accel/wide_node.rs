@@ -113,7 +113,7 @@ pub(super) fn leaf_lanes(node: &WideNode) -> u32 {
 }
 
 /// Appends the wide node for binary node `b` (and its subtree) at `depth`; returns its
-/// index and the deepest level in its subtree.
+/// index and the deepest level in its subtree. Allocates nothing but the nodes it appends.
 pub(super) fn collapse_node(
     bvh: &Bvh,
     b: usize,
@@ -122,29 +122,48 @@ pub(super) fn collapse_node(
 ) -> (u32, u32) {
     let me = out.len();
     out.push(WideNode::UNUSED);
-    let first = &bvh.nodes[b];
-    let mut kids: Vec<usize> = if first.is_leaf() {
-        vec![b]
-    } else {
-        vec![b + 1, first.offset as usize]
+    // The children so far, in order, and the surface area of each interior one (None
+    // for a leaf), computed once per child rather than at every opening.
+    let mut kids = [0usize; WIDTH];
+    let mut areas: [Option<f32>; WIDTH] = [None; WIDTH];
+    let area = |k: usize| {
+        let node = &bvh.nodes[k];
+        (!node.is_leaf()).then(|| node.bounds().surface_area())
     };
-    // Open the interior child of largest area until `WIDTH` children are reached.
-    while kids.len() < WIDTH {
-        let Some(k) = (0..kids.len())
-            .filter(|&k| !bvh.nodes[kids[k]].is_leaf())
-            .max_by(|&x, &y| {
-                let area = |k: usize| bvh.nodes[kids[k]].bounds().surface_area();
-                area(x).total_cmp(&area(y))
-            })
-        else {
+    let first = &bvh.nodes[b];
+    let mut n = if first.is_leaf() {
+        kids[0] = b;
+        1
+    } else {
+        for (i, k) in [b + 1, first.offset as usize].into_iter().enumerate() {
+            (kids[i], areas[i]) = (k, area(k));
+        }
+        2
+    };
+    // Open the interior child of largest area until `WIDTH` children are reached; of
+    // equal areas the last, as `Iterator::max_by` picked before (the same tree).
+    while n < WIDTH {
+        let mut open: Option<(usize, f32)> = None;
+        for (k, a) in areas[..n].iter().enumerate() {
+            if let Some(a) = *a
+                && open.is_none_or(|(_, best)| a.total_cmp(&best).is_ge())
+            {
+                open = Some((k, a));
+            }
+        }
+        let Some((k, _)) = open else {
             break;
         };
-        let open = kids[k];
-        kids[k] = open + 1;
-        kids.insert(k + 1, bvh.nodes[open].offset as usize);
+        let node = kids[k];
+        kids.copy_within(k + 1..n, k + 2);
+        areas.copy_within(k + 1..n, k + 2);
+        (kids[k], areas[k]) = (node + 1, area(node + 1));
+        let right = bvh.nodes[node].offset as usize;
+        (kids[k + 1], areas[k + 1]) = (right, area(right));
+        n += 1;
     }
     let mut deepest = depth;
-    for (lane, &k) in kids.iter().enumerate() {
+    for (lane, &k) in kids[..n].iter().enumerate() {
         let node = bvh.nodes[k];
         out[me].set_child_bounds(lane, node.bounds());
         if node.is_leaf() {
