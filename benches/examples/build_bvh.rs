@@ -3,12 +3,12 @@
 //! builds over the anchors bench's torus of about `n` triangles (default 100000) `rounds` times
 //! (default 5) on `threads` threads (default 1) and prints the median and range of the
 //! build time, the tree's SAH cost and a hash of the tree (which changes when the tree
-//! does).
+//! does), then the median and range of its collapse to the 8-wide BVH on the same threads.
 
 use std::time::Instant;
 
 use glint::accel::leaf::LANES;
-use glint::accel::{Aabb, Bvh, SplitMethod};
+use glint::accel::{Aabb, Bvh, SplitMethod, WideBvh};
 use glint_bench::displaced_torus;
 
 fn main() {
@@ -43,6 +43,22 @@ fn main() {
         bvh.sah_cost(),
         group_sah_cost(&bvh),
         bvh.tree_hash()
+    );
+    let mut ms = Vec::new();
+    let mut wide = WideBvh::default();
+    for _ in 0..rounds {
+        let start = Instant::now();
+        wide = pool.install(|| WideBvh::collapse(&bvh, &tris));
+        ms.push(start.elapsed().as_secs_f64() * 1e3);
+    }
+    ms.sort_by(f64::total_cmp);
+    println!(
+        "collapse {:.1} ms median [{:.1}-{:.1}], {} wide nodes, {:.1} bytes/tri",
+        ms[ms.len() / 2],
+        ms[0],
+        ms[ms.len() - 1],
+        wide.nodes.len(),
+        wide.bytes() as f64 / tris.len() as f64
     );
 }
 

@@ -24,6 +24,7 @@ pub mod sphere;
 pub mod traverse;
 pub mod triangle;
 pub mod wide;
+pub mod wide_node;
 
 pub use aabb::Aabb;
 pub use bvh::{Bvh, BvhNode, SplitMethod};
