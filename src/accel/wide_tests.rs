@@ -2,6 +2,7 @@
 
 use super::*;
 use crate::accel::SplitMethod;
+use crate::accel::triangle::{RayShear, TriangleHit, intersect_triangle_sheared};
 use crate::test_util::Lcg;
 use glam::vec3;
 
