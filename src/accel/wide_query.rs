@@ -30,10 +30,13 @@ struct RayLeaves<'a> {
 
 impl RayLeaves<'_> {
     /// Tests the triangles of the leaf at `group` with `count` triangles: the SoA
-    /// prefilter, then the exact test on each lane it keeps, both against `*bound`;
+    /// prefilter, then the exact test's answer on each lane it keeps (from the lane's
+    /// values where they decide it), both against `*bound`;
     /// `hit(prim, hit, bound)` may lower the bound and returns true to stop.
+    /// `DECIDE`: take a lane's hit from the prefilter's values where they decide it
+    /// (what pays for closest hits; any-hit queries mostly stop at their first hit).
     #[inline(always)]
-    fn hits(
+    fn hits<const DECIDE: bool>(
         &self,
         group: usize,
         count: usize,
@@ -45,13 +48,19 @@ impl RayLeaves<'_> {
             let g = &wide.leaves.groups[group + i];
             // The bound only falls within the group, so the group's first bound lets
             // through every lane a later, lower one accepts.
-            let mut lanes = self.pre.candidates(g, *bound) & lane_mask(i, count);
+            let candidates = self.pre.candidates(g, *bound);
+            let mut lanes = candidates.mask & lane_mask(i, count);
             while lanes != 0 {
                 let lane = lanes.trailing_zeros() as usize;
                 lanes &= lanes - 1;
-                let [a, b, c] = g.triangle(lane);
-                let Some(h) = intersect_triangle_sheared(&self.shear, ray.origin, a, b, c, *bound)
-                else {
+                let tri = g.triangle(lane);
+                let h = if DECIDE {
+                    candidates.hit(lane, tri, &self.shear, ray.origin, *bound)
+                } else {
+                    let [a, b, c] = tri;
+                    intersect_triangle_sheared(&self.shear, ray.origin, a, b, c, *bound)
+                };
+                let Some(h) = h else {
                     continue;
                 };
                 let p = wide.prims[wide.leaves.first[group + i] as usize + lane];
@@ -83,7 +92,7 @@ impl LeafVisitor for ClosestLeaves<'_> {
     fn leaf(&mut self, group: usize, count: usize, t_max: &mut f32) -> bool {
         let (best, limit) = (&mut self.best, self.limit);
         self.leaves
-            .hits(group, count, &mut self.bound, |p, h, bound| {
+            .hits::<true>(group, count, &mut self.bound, |p, h, bound| {
                 if best.is_none_or(|(bp, bh)| h.t < bh.t || (h.t == bh.t && p < bp)) {
                     *t_max = h.t;
                     *bound = h.t.next_up().next_up().next_up().min(limit);
@@ -106,7 +115,7 @@ impl<F: FnMut(u32, &TriangleHit) -> bool> LeafVisitor for AnyLeaves<'_, F> {
     fn leaf(&mut self, group: usize, count: usize, _: &mut f32) -> bool {
         let visit = &mut self.visit;
         self.leaves
-            .hits(group, count, &mut self.bound, |p, h, _| visit(p, h))
+            .hits::<false>(group, count, &mut self.bound, |p, h, _| visit(p, h))
     }
 }
 
