@@ -14,16 +14,14 @@
 //! closest hit is the binary tree's, up to which of two triangles at exactly the
 //! same t is met first.
 
-use arrayvec::ArrayVec;
-use glam::Vec3;
-use multiversion::multiversion;
-
 use super::bvh::{Bvh, MAX_DEPTH};
-use super::leaf::{LANES, LeafTris, RayLeaf, groups_for, lane_mask};
-use super::triangle::{RayShear, TriangleHit, intersect_triangle_sheared};
+use super::leaf::{LANES, LeafTris};
 use super::wide_node::{EMPTY, RayBoxes, collapse_node, leaf_lanes};
 pub use super::wide_node::{WIDTH, WideNode};
+use super::wide_query::LeafVisitor;
 use super::{Aabb, BOX_MARGIN, Ray};
+use arrayvec::ArrayVec;
+use glam::Vec3;
 
 /// A `WIDTH`-wide BVH with its triangles in leaf order; root at node 0.
 #[derive(Clone, Debug, Default)]
@@ -117,14 +115,14 @@ impl WideBvh {
     /// Visits leaves in near-to-far order of their boxes' entry distances while
     /// they start before `*t_max` (`NEAREST_FIRST`), or each node's leaves before
     /// its interior children without sorting (for any-hit queries, where order does
-    /// not decide the answer); `leaf(first, count, t_max)` may lower `t_max` and
-    /// returns true to stop. Returns whether a leaf stopped it.
+    /// not decide the answer); `visitor.leaf(first, count, t_max)` may lower `t_max`
+    /// and returns true to stop. Returns whether a leaf stopped it.
     #[inline(always)]
-    fn traverse<const NEAREST_FIRST: bool>(
+    pub(super) fn traverse<const NEAREST_FIRST: bool>(
         &self,
         ray: &Ray,
         t_max: &mut f32,
-        mut leaf: impl FnMut(usize, usize, &mut f32) -> bool,
+        visitor: &mut impl LeafVisitor,
     ) -> bool {
         if self.nodes.is_empty()
             || self
@@ -155,7 +153,7 @@ impl WideBvh {
                     let lane = leaves.trailing_zeros() as usize;
                     leaves &= leaves - 1;
                     let (child, count) = (node.child[lane], node.count[lane]);
-                    if leaf(child as usize, count as usize, t_max) {
+                    if visitor.leaf(child as usize, count as usize, t_max) {
                         return true;
                     }
                 }
@@ -225,114 +223,9 @@ impl WideBvh {
                 leaves &= !(1 << lane);
                 let lane = lane as usize;
                 let (child, count) = (node.child[lane], node.count[lane]);
-                if t[lane] <= *t_max * BOX_MARGIN && leaf(child as usize, count as usize, t_max) {
-                    return true;
-                }
-            }
-        }
-        false
-    }
-
-    /// The closest hit in (0, t_max): the caller's triangle index and the hit. Of
-    /// triangles hit at exactly the same t (where two meet), the lowest index wins,
-    /// whatever order the traversal meets them in.
-    pub fn closest_hit(&self, ray: &Ray, t_max: f32) -> Option<(u32, TriangleHit)> {
-        closest_hit_dispatched(self, ray, t_max)
-    }
-
-    /// [`Self::closest_hit`] compiled for whatever target features the caller has.
-    #[inline(always)]
-    fn closest_hit_inlined(&self, ray: &Ray, t_max: f32) -> Option<(u32, TriangleHit)> {
-        let shear = RayShear::new(ray);
-        let pre = RayLeaf::new(ray, &shear);
-        let mut best: Option<(u32, TriangleHit)> = None;
-        let limit = t_max;
-        let mut t_max = t_max;
-        // Past the best t so far by more than the rounding of the triangle test's scaled
-        // early-out (t_scaled against bound * det, three roundings): then every triangle
-        // with t at or below the best passes it whatever the order of the leaves, and the
-        // comparison below alone decides, so the hit is the least (t, index) of the
-        // triangles hit before `limit`. It changes only with the best hit.
-        let mut bound = limit;
-        self.traverse::<true>(ray, &mut t_max, |group, count, t_max| {
-            self.leaf_hits(
-                ray,
-                &shear,
-                &pre,
-                group,
-                count,
-                &mut bound,
-                |p, h, bound| {
-                    if best.is_none_or(|(bp, bh)| h.t < bh.t || (h.t == bh.t && p < bp)) {
-                        *t_max = h.t;
-                        *bound = h.t.next_up().next_up().next_up().min(limit);
-                        best = Some((p, *h));
-                    }
-                    false
-                },
-            )
-        });
-        best
-    }
-
-    /// Visits triangles the ray meets in (0, t_max), in no particular order, until
-    /// `visit(prim, hit)` returns true (stop); returns whether it stopped.
-    pub fn any_hit(
-        &self,
-        ray: &Ray,
-        t_max: f32,
-        visit: impl FnMut(u32, &TriangleHit) -> bool,
-    ) -> bool {
-        any_hit_dispatched(self, ray, t_max, visit)
-    }
-
-    /// [`Self::any_hit`] compiled for whatever target features the caller has.
-    #[inline(always)]
-    fn any_hit_inlined(
-        &self,
-        ray: &Ray,
-        t_max: f32,
-        mut visit: impl FnMut(u32, &TriangleHit) -> bool,
-    ) -> bool {
-        let shear = RayShear::new(ray);
-        let pre = RayLeaf::new(ray, &shear);
-        let (mut t, mut bound) = (t_max, t_max);
-        self.traverse::<false>(ray, &mut t, |group, count, _| {
-            self.leaf_hits(ray, &shear, &pre, group, count, &mut bound, |p, h, _| {
-                visit(p, h)
-            })
-        })
-    }
-
-    /// Tests the triangles of the leaf at `group` with `count` triangles: the SoA
-    /// prefilter, then the exact test on each lane it keeps, both against `*bound`;
-    /// `hit(prim, hit, bound)` may lower the bound and returns true to stop.
-    #[allow(clippy::too_many_arguments)]
-    #[inline(always)]
-    fn leaf_hits(
-        &self,
-        ray: &Ray,
-        shear: &RayShear,
-        pre: &RayLeaf,
-        group: usize,
-        count: usize,
-        bound: &mut f32,
-        mut hit: impl FnMut(u32, &TriangleHit, &mut f32) -> bool,
-    ) -> bool {
-        for i in 0..groups_for(count) {
-            let g = &self.leaves.groups[group + i];
-            // The bound only falls within the group, so the group's first bound lets
-            // through every lane a later, lower one accepts.
-            let mut lanes = pre.candidates(g, *bound) & lane_mask(i, count);
-            while lanes != 0 {
-                let lane = lanes.trailing_zeros() as usize;
-                lanes &= lanes - 1;
-                let [a, b, c] = g.triangle(lane);
-                let Some(h) = intersect_triangle_sheared(shear, ray.origin, a, b, c, *bound) else {
-                    continue;
-                };
-                let p = self.prims[self.leaves.first[group + i] as usize + lane];
-                if hit(p, &h, bound) {
+                if t[lane] <= *t_max * BOX_MARGIN
+                    && visitor.leaf(child as usize, count as usize, t_max)
+                {
                     return true;
                 }
             }
@@ -466,28 +359,6 @@ fn prim_lanes(nodes: &[WideNode], leaves: &LeafTris, prims: &[u32]) -> Vec<u32> 
         }
     }
     lanes
-}
-
-// Runtime dispatch: one clone of each query per instruction set, the traversal and
-// triangle tests (`#[inline(always)]`) compiled inside each, picked once per process
-// from the CPU's features; no `-C target-cpu` needed. Rust never contracts a * b + c
-// into an FMA by itself, so every clone computes bit-identical results.
-
-/// [`WideBvh::closest_hit`] for the best instruction set the CPU has.
-#[multiversion(targets("x86_64+avx2+fma", "x86_64+sse4.2"))]
-fn closest_hit_dispatched(wide: &WideBvh, ray: &Ray, t_max: f32) -> Option<(u32, TriangleHit)> {
-    wide.closest_hit_inlined(ray, t_max)
-}
-
-/// [`WideBvh::any_hit`] for the best instruction set the CPU has.
-#[multiversion(targets("x86_64+avx2+fma", "x86_64+sse4.2"))]
-fn any_hit_dispatched<F: FnMut(u32, &TriangleHit) -> bool>(
-    wide: &WideBvh,
-    ray: &Ray,
-    t_max: f32,
-    visit: F,
-) -> bool {
-    wide.any_hit_inlined(ray, t_max, visit)
 }
 
 #[cfg(test)]

@@ -1,6 +1,7 @@
 //! Tests of the wide BVH against the binary tree and brute force.
 
 use super::*;
+use crate::accel::triangle::{RayShear, TriangleHit, intersect_triangle_sheared};
 use crate::accel::{BvhNode, SplitMethod};
 use crate::test_util::Lcg;
 use glam::vec3;
