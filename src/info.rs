@@ -50,7 +50,7 @@ pub fn describe(renderer: &mut Renderer) -> Result<String> {
             "  instances     {} of {} shared meshes ({} triangles stored once each)",
             instanced.instances.len(),
             instanced.meshes.len(),
-            geometry.triangles_stored() - geometry.tri_positions.len() as u64
+            geometry.triangles_stored() - geometry.triangles_flattened() as u64
         );
     }
     let _ = writeln!(o, "  spheres       {spheres}");
@@ -87,7 +87,7 @@ pub fn describe(renderer: &mut Renderer) -> Result<String> {
         let bytes = geometry.triangle_bytes();
         let _ = writeln!(
             o,
-            "  accel memory  {bytes} bytes, {:.1} per stored triangle (nodes, triangle data, indices, positions)",
+            "  accel memory  {bytes} bytes, {:.1} per stored triangle (nodes, leaf vertices, indices)",
             bytes as f64 / stored as f64
         );
     }

@@ -84,7 +84,7 @@ fn instanced_meshes_render_like_flattened_copies() {
     assert_eq!(g.instanced.meshes.len(), 2);
     assert_eq!(g.instanced.instances.len(), 8);
     // Only the floor is flattened.
-    assert_eq!(g.tri_positions.len(), 8);
+    assert_eq!(g.triangles_flattened(), 8);
     // Rays meet instances in object space: t and barycentrics round differently than on
     // the flattened copies, so colours agree to rounding (relative 5e-5; measured 1.3e-5
     // at most, through mirrors and glass); about three in four pixels are identical.
@@ -117,7 +117,10 @@ fn without_acceleration_shared_meshes_are_flattened() {
         "a top-level BVH under acceleration: None"
     );
     // Every triangle of every copy, in the one leaf, and the same image.
-    assert_eq!(g.tri_positions.len(), geometry(&copied).tri_positions.len());
+    assert_eq!(
+        g.triangles_flattened(),
+        geometry(&copied).triangles_flattened()
+    );
     assert_eq!(g.tri_wide.nodes.len(), 1);
     for (x, y) in (0..n).flat_map(|y| (0..n).map(move |x| (x, y))) {
         assert_eq!(shared.film().pixel(x, y), copied.film().pixel(x, y));
@@ -175,7 +178,7 @@ fn instanced_hits_land_where_the_transforms_put_them() {
     let g = geometry(&r);
     assert_eq!(g.instanced.instances.len(), 5);
     assert_eq!(g.instanced.meshes.len(), 2);
-    assert!(g.tri_positions.is_empty());
+    assert_eq!(g.triangles_flattened(), 0);
 
     // The sheared quad: plane z = 0.5 x. t is in units of the (non-unit) direction.
     let ray = Ray::new(Vec3::new(0.1, 0.1, 5.0), Vec3::new(0.0, 0.0, -2.0));

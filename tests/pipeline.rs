@@ -65,14 +65,11 @@ fn the_bvh_built_by_the_schedule_validates_and_covers_every_triangle() {
     r.prepare().unwrap();
     let g = r.world.resource::<SceneGeometry>();
     // 5 walls of 2 triangles, 2 boxes of 12.
-    assert_eq!(g.tri_positions.len(), 34);
-    let bounds: Vec<Aabb> = g
-        .tri_positions
-        .iter()
-        .map(|p| Aabb::from_points(p))
-        .collect();
+    let positions = g.all_positions();
+    assert_eq!(positions.len(), 34);
+    let bounds: Vec<Aabb> = positions.iter().map(|p| Aabb::from_points(p)).collect();
     g.tri_bvh.validate(&bounds).unwrap();
-    g.tri_wide.validate(&g.tri_positions).unwrap();
+    g.tri_wide.validate(&positions).unwrap();
     let mut covered = g.tri_bvh.prim_indices.clone();
     covered.sort_unstable();
     assert_eq!(covered, (0..34).collect::<Vec<u32>>());
@@ -86,7 +83,7 @@ fn a_render_keeps_only_the_wide_triangle_bvh() {
     assert!(!r.plan().binary_triangle_bvh);
     let g = r.world.resource::<SceneGeometry>();
     assert!(g.tri_bvh.nodes.is_empty() && g.tri_bvh.prim_indices.is_empty());
-    g.tri_wide.validate(&g.tri_positions).unwrap();
+    g.tri_wide.validate(&g.all_positions()).unwrap();
     assert_eq!(g.tri_wide.prims.len(), 34);
     let entry = r
         .plan()

@@ -151,8 +151,7 @@ fn restart_with_a_new_view_and_settings_renders_as_a_fresh_renderer() {
     let triangles = r
         .world
         .resource::<glint::trace::geometry::SceneGeometry>()
-        .tri_positions
-        .len();
+        .triangles_flattened();
     let mut camera = r.camera().unwrap();
     camera.position += glam::Vec3::new(0.3, 0.2, 0.0);
     (camera.width, camera.height) = (12, 10);
@@ -164,7 +163,7 @@ fn restart_with_a_new_view_and_settings_renders_as_a_fresh_renderer() {
     }
     assert!(!r.plan().shadow_rays);
     let geometry = r.world.resource::<glint::trace::geometry::SceneGeometry>();
-    assert_eq!(geometry.tri_positions.len(), triangles);
+    assert_eq!(geometry.triangles_flattened(), triangles);
 
     let mut fresh = load(&scene(
         16,

@@ -212,13 +212,13 @@ pub fn find_file(dir: &Path, ext: &str) -> Result<PathBuf, String> {
 /// World-space triangles exactly as glint renders them: the model imported
 /// by glint's own importer, flattened by its Prepare schedule.
 pub fn load_model(path: &Path) -> Result<Vec<[Vec3; 3]>, String> {
-    let mut renderer = glint::Renderer::from_file(path, &Default::default())
+    let renderer = glint::Renderer::from_file(path, &Default::default())
         .and_then(|mut r| r.prepare().map(|()| r))
         .map_err(|e| e.to_string())?;
-    let mut geometry = renderer
+    let geometry = renderer
         .world
-        .resource_mut::<glint::trace::geometry::SceneGeometry>();
-    Ok(std::mem::take(&mut geometry.tri_positions))
+        .resource::<glint::trace::geometry::SceneGeometry>();
+    Ok(geometry.all_positions())
 }
 
 /// `../shared/assets` next to the checkout, if present.

@@ -14,7 +14,7 @@
 use glam::Vec3;
 
 use super::Ray;
-use super::triangle::RayShear;
+use super::triangle::{RayShear, TriangleHit, intersect_triangle_sheared, is_degenerate};
 use super::wide::WideNode;
 
 /// Triangles per group. Four beat eight on the 100k torus: the binned-SAH leaves
@@ -196,34 +196,34 @@ impl RayLeaf {
         }
     }
 
-    /// Lanes of `g` the scalar test with bound `t_max` may accept: bit `lane` is clear
-    /// only when [`intersect_triangle_sheared`] rejects that lane before its division.
+    /// The prefilter of group `g` with bound `t_max`: the lanes the scalar test may
+    /// accept (bit `lane` is clear only when [`intersect_triangle_sheared`] rejects that
+    /// lane before its division) and the values that decide most of them without it.
     /// The same operations in the same order: `(p - origin)[k]` is `p[k] - origin[k]`;
     /// Rust never fuses a product and a sum. No branches, so the loop vectorises.
     #[inline(always)]
-    pub fn candidates(&self, g: &TriGroup, t_max: f32) -> u32 {
-        let [kx, ky, kz] = self.axes;
-        let [ox, oy, oz] = self.origin;
-        let (sx, sy, sz) = (self.sx, self.sy, self.sz);
-        let (a, b, c) = (&g.v[0], &g.v[1], &g.v[2]);
+    pub fn candidates(&self, g: &TriGroup, t_max: f32) -> Candidates {
+        let mut out = Candidates {
+            mask: 0,
+            zero: 0,
+            e: [[0.0; LANES]; 3],
+            det: [0.0; LANES],
+            t_scaled: [0.0; LANES],
+            sizes: [[0.0; LANES]; 3],
+        };
         let mut bits = [0u32; LANES];
-        for (lane, bit) in bits.iter_mut().enumerate() {
-            let (a_x, a_y, a_z) = (a[kx][lane] - ox, a[ky][lane] - oy, a[kz][lane] - oz);
-            let (b_x, b_y, b_z) = (b[kx][lane] - ox, b[ky][lane] - oy, b[kz][lane] - oz);
-            let (c_x, c_y, c_z) = (c[kx][lane] - ox, c[ky][lane] - oy, c[kz][lane] - oz);
-            let ax = a_x - sx * a_z;
-            let ay = a_y - sy * a_z;
-            let bx = b_x - sx * b_z;
-            let by = b_y - sy * b_z;
-            let cx = c_x - sx * c_z;
-            let cy = c_y - sy * c_z;
+        let mut zeros = [0u32; LANES];
+        for lane in 0..LANES {
+            let sheared = self.shear(g, lane);
+            let (xy, z) = (sheared.xy, sheared.z);
+            let [ax, ay, bx, by, cx, cy] = xy;
             let u = cx * by - cy * bx;
             let v = ax * cy - ay * cx;
             let w = bx * ay - by * ax;
             let zero = (u == 0.0) | (v == 0.0) | (w == 0.0);
             let mixed = ((u < 0.0) | (v < 0.0) | (w < 0.0)) & ((u > 0.0) | (v > 0.0) | (w > 0.0));
             let det = u + v + w;
-            let t_scaled = u * (sz * a_z) + v * (sz * b_z) + w * (sz * c_z);
+            let t_scaled = u * z[0] + v * z[1] + w * z[2];
             let bound = t_max * det;
             let outside = if det < 0.0 {
                 (t_scaled >= 0.0) | (t_scaled <= bound)
@@ -231,189 +231,154 @@ impl RayLeaf {
                 (t_scaled <= 0.0) | (t_scaled >= bound)
             };
             let keep = zero | !(mixed | (det == 0.0) | outside);
-            *bit = (keep as u32) << lane;
+            bits[lane] = (keep as u32) << lane;
+            zeros[lane] = (zero as u32) << lane;
+            [out.e[0][lane], out.e[1][lane], out.e[2][lane]] = [u, v, w];
+            out.det[lane] = det;
+            out.t_scaled[lane] = t_scaled;
+            [out.sizes[0][lane], out.sizes[1][lane], out.sizes[2][lane]] = sheared.sizes();
         }
-        bits.iter().fold(0, |mask, &bit| mask | bit)
+        out.mask = bits.iter().fold(0, |mask, &bit| mask | bit);
+        out.zero = zeros.iter().fold(0, |mask, &bit| mask | bit);
+        out
     }
+
+    /// Lane `lane` of `g` in ray space, as [`intersect_triangle_sheared`] computes it.
+    #[inline(always)]
+    fn shear(&self, g: &TriGroup, lane: usize) -> Sheared {
+        let [kx, ky, kz] = self.axes;
+        let [ox, oy, oz] = self.origin;
+        let (sx, sy, sz) = (self.sx, self.sy, self.sz);
+        let (a, b, c) = (&g.v[0], &g.v[1], &g.v[2]);
+        let (a_x, a_y, a_z) = (a[kx][lane] - ox, a[ky][lane] - oy, a[kz][lane] - oz);
+        let (b_x, b_y, b_z) = (b[kx][lane] - ox, b[ky][lane] - oy, b[kz][lane] - oz);
+        let (c_x, c_y, c_z) = (c[kx][lane] - ox, c[ky][lane] - oy, c[kz][lane] - oz);
+        Sheared {
+            rel: [a_x, a_y, a_z, b_x, b_y, b_z, c_x, c_y, c_z],
+            xy: [
+                a_x - sx * a_z,
+                a_y - sy * a_z,
+                b_x - sx * b_z,
+                b_y - sy * b_z,
+                c_x - sx * c_z,
+                c_y - sy * c_z,
+            ],
+            z: [sz * a_z, sz * b_z, sz * c_z],
+        }
+    }
+}
+
+/// A triangle in ray space: vertices relative to the origin (permuted axes), their
+/// sheared x and y, their scaled z.
+struct Sheared {
+    rel: [f32; 9],
+    xy: [f32; 6],
+    z: [f32; 3],
+}
+
+impl Sheared {
+    /// The largest magnitude of `rel`, of `xy` and of `z`: what the scalar test's
+    /// error bound on t grows with. A NaN coordinate makes t NaN, so it may be skipped.
+    #[inline(always)]
+    fn sizes(&self) -> [f32; 3] {
+        // maxps itself: f32::max would add a NaN check per lane.
+        let max = |m: f32, x: &f32| if m > x.abs() { m } else { x.abs() };
+        [
+            self.rel.iter().fold(0.0, max),
+            self.xy.iter().fold(0.0, max),
+            self.z.iter().fold(0.0, max),
+        ]
+    }
+}
+
+/// The prefilter's answer for one group: the lanes the scalar test may accept, and
+/// the scalar test's own intermediate values on each lane, bit for bit.
+pub struct Candidates {
+    /// Lanes the scalar test may accept.
+    pub mask: u32,
+    /// Lanes with an edge function exactly zero, which the scalar test redoes in f64.
+    zero: u32,
+    /// The edge functions u, v, w.
+    e: [[f32; LANES]; 3],
+    det: [f32; LANES],
+    t_scaled: [f32; LANES],
+    /// [`Sheared::sizes`] of each lane.
+    sizes: [[f32; LANES]; 3],
+}
+
+impl Candidates {
+    /// [`intersect_triangle_sheared`] on lane `lane` (in `mask`) of the group, whose
+    /// triangle is `tri` (`g.triangle(lane)`), with a bound `t_max` at most the prefilter's. From the lane's
+    /// values when they decide it: no zero edge function (so the signs, det and the
+    /// sign of t_scaled passed as in the scalar test) and a t far enough from 0 that the
+    /// scalar test's error bound on t cannot send it to its f64 recheck (see
+    /// `clear_of_zero`); else the scalar test itself.
+    #[inline(always)]
+    pub fn hit(
+        &self,
+        lane: usize,
+        tri: [Vec3; 3],
+        shear: &RayShear,
+        origin: Vec3,
+        t_max: f32,
+    ) -> Option<TriangleHit> {
+        let [a, b, c] = tri;
+        if self.zero & (1 << lane) != 0 {
+            return intersect_triangle_sheared(shear, origin, a, b, c, t_max);
+        }
+        let (det, t_scaled) = (self.det[lane], self.t_scaled[lane]);
+        // The scalar test's remaining checks, in its order, against the current bound.
+        let beyond = if det < 0.0 {
+            t_scaled <= t_max * det
+        } else {
+            t_scaled >= t_max * det
+        };
+        if beyond || is_degenerate(a, b, c) {
+            return None;
+        }
+        let inv_det = 1.0 / det;
+        let t = t_scaled * inv_det;
+        if !(t > 0.0 && t < t_max) {
+            return None;
+        }
+        if !clear_of_zero(t, det, self.sizes.map(|s| s[lane])) {
+            return intersect_triangle_sheared(shear, origin, a, b, c, t_max);
+        }
+        let [u, v, w] = self.e.map(|e| e[lane]);
+        Some(TriangleHit {
+            t,
+            b0: u * inv_det,
+            b1: v * inv_det,
+            b2: w * inv_det,
+        })
+    }
+}
+
+/// True when `t` exceeds three times the scalar test's bound on its rounding error
+/// (`triangle::t_error`), so that the test keeps t without its f64 recheck. `sizes`
+/// are P, S, Z: the largest magnitude of the relative vertex coordinates, of their
+/// sheared x and y, and of the scaled z. With the edge functions all of one sign
+/// (|u| + |v| + |w| <= |det| (1 + 3u)) and |sx|, |sy| <= 1, each term of that bound is
+/// at most: the errors of the sheared coordinates 2 gamma(5) P; of the edge functions
+/// together 24 gamma(5) P S + 6 gamma(2) S^2 =: E; of det E + gamma(2) |det|, of
+/// t_scaled E Z + gamma(6) Z |det|; so the bound is at most
+/// (1 + 1e-5) u ((120 P S + 12 S^2) (Z + t) / |det| + 6 Z + 2 t), u = 2^-24, evaluated
+/// here in f64 (no overflow or underflow from f32 inputs) with a margin for its own
+/// rounding.
+#[inline(always)]
+fn clear_of_zero(t: f32, det: f32, sizes: [f32; 3]) -> bool {
+    f64::from(t) > 3.0001 * t_error_bound(t, det, sizes)
+}
+
+/// The bound of [`clear_of_zero`] on the scalar test's bound on t's rounding error.
+#[inline(always)]
+fn t_error_bound(t: f32, det: f32, sizes: [f32; 3]) -> f64 {
+    let [p, s, z] = sizes.map(f64::from);
+    let (t, det) = (f64::from(t).abs(), f64::from(det).abs());
+    let unit = f64::from(f32::EPSILON) * 0.5;
+    unit * ((120.0 * p * s + 12.0 * s * s) * (z + t) / det + 6.0 * z + 2.0 * t)
 }
 
 #[cfg(test)]
-mod tests {
-    use super::*;
-    use crate::accel::triangle::{TriangleHit, intersect_triangle_sheared};
-    use crate::test_util::Lcg;
-    use glam::vec3;
-
-    /// Each lane's hit as the wide BVH's leaves compute it: prefilter, then the
-    /// scalar test on the lanes that pass. Also returns the prefilter's mask.
-    fn leaf_hits(ray: &Ray, g: &TriGroup, t_max: f32) -> ([Option<TriangleHit>; LANES], u32) {
-        let s = RayShear::new(ray);
-        let mask = RayLeaf::new(ray, &s).candidates(g, t_max);
-        let hits = std::array::from_fn(|lane| {
-            let [a, b, c] = g.triangle(lane);
-            (mask & (1 << lane) != 0)
-                .then(|| intersect_triangle_sheared(&s, ray.origin, a, b, c, t_max))
-                .flatten()
-        });
-        (hits, mask)
-    }
-
-    /// Every lane of every group agrees with the scalar test bit for bit; returns the
-    /// lanes the scalar test missed and how many of those the prefilter rejected.
-    fn check(rays: &[(Ray, f32)], tris: &[[Vec3; 3]]) -> (usize, usize) {
-        let (mut misses, mut rejected) = (0, 0);
-        for chunk in tris.chunks(LANES) {
-            let mut g = TriGroup::PADDING;
-            for (lane, &tri) in chunk.iter().enumerate() {
-                g.set_triangle(lane, tri);
-            }
-            for &(ray, t_max) in rays {
-                let (hits, mask) = leaf_hits(&ray, &g, t_max);
-                let s = RayShear::new(&ray);
-                for (lane, &[a, b, c]) in chunk.iter().enumerate() {
-                    let expect = intersect_triangle_sheared(&s, ray.origin, a, b, c, t_max);
-                    let bits = |h: Option<TriangleHit>| {
-                        h.map(|h| [h.t, h.b0, h.b1, h.b2].map(f32::to_bits))
-                    };
-                    assert_eq!(
-                        bits(hits[lane]),
-                        bits(expect),
-                        "{ray:?} {t_max} {:?}",
-                        [a, b, c]
-                    );
-                    if expect.is_none() {
-                        misses += 1;
-                        rejected += (mask & (1 << lane) == 0) as usize;
-                    }
-                }
-            }
-        }
-        (misses, rejected)
-    }
-
-    #[test]
-    fn prefilter_and_confirm_match_the_scalar_test_on_random_rays() {
-        let mut rng = Lcg(77);
-        let tris: Vec<[Vec3; 3]> = (0..64)
-            .map(|_| {
-                let c = rng.vec() * 4.0 - Vec3::splat(2.0);
-                [c, c + rng.dir(), c + rng.dir()]
-            })
-            .collect();
-        let rays: Vec<(Ray, f32)> = (0..400)
-            .map(|i| {
-                let mut d = rng.dir() * (0.5 + rng.next_f32());
-                // Zero direction components, one or two of them.
-                if i % 7 == 0 {
-                    d[i % 3] = 0.0;
-                }
-                if i % 21 == 0 {
-                    d[(i + 1) % 3] = 0.0;
-                }
-                let t_max = [f32::INFINITY, 2.0, 0.5][i % 3];
-                (Ray::new(rng.vec() * 6.0 - Vec3::splat(3.0), d), t_max)
-            })
-            .collect();
-        let (misses, rejected) = check(&rays, &tris);
-        // Not a pass-everything filter: nearly all misses end in the vector pass.
-        assert!(
-            rejected * 10 > misses * 9,
-            "{rejected} of {misses} misses rejected"
-        );
-    }
-
-    #[test]
-    fn edges_vertices_degenerate_and_nan_triangles_match_the_scalar_test() {
-        let p = |x: f32, z: f32| vec3(x, 0.0, z);
-        let tris = [
-            // Two triangles of a unit quad (a shared diagonal) and a neighbour.
-            [p(0.0, 0.0), p(1.0, 0.0), p(1.0, 1.0)],
-            [p(0.0, 0.0), p(1.0, 1.0), p(0.0, 1.0)],
-            [p(1.0, 0.0), p(2.0, 0.0), p(1.0, 1.0)],
-            // Zero area: collinear, and one point.
-            [p(0.0, 0.0), p(0.5, 0.5), p(1.0, 1.0)],
-            [p(0.5, 0.5); 3],
-            // NaN and infinite coordinates.
-            [p(f32::NAN, 0.0), p(1.0, 0.0), p(1.0, 1.0)],
-            [p(0.0, 0.0), p(f32::INFINITY, 0.0), p(1.0, 1.0)],
-            // Thin, far from the origin.
-            [p(1e4, 1e4), p(1e4 + 1e-3, 1e4), p(1e4, 1e4 + 1e-3)],
-        ];
-        let mut rays = Vec::new();
-        // Through vertices, edge midpoints and the diagonal, straight down and slanted.
-        let targets = [0.0, 0.5, 1.0, 2.0]
-            .iter()
-            .flat_map(|&x| [0.0, 0.5, 1.0].iter().map(move |&z| p(x, z)));
-        for target in targets.chain([p(0.25, 0.25), p(0.75, 0.75), p(1e4, 1e4)]) {
-            for dir in [
-                vec3(0.0, -1.0, 0.0),
-                vec3(0.3, -1.0, 0.2),
-                vec3(-0.1, -0.7, 0.4),
-            ] {
-                let origin = target - 2.0 * dir;
-                rays.push((Ray::new(origin, dir), f32::INFINITY));
-                // Bounds at, just below and just past the exact hit distance.
-                for t in [2.0f32, 2.0f32.next_down(), 2.0f32.next_up()] {
-                    rays.push((Ray::new(origin, dir), t));
-                }
-            }
-            // In the triangles' plane, and a zero direction.
-            rays.push((Ray::new(target - Vec3::X, Vec3::X), f32::INFINITY));
-            rays.push((
-                Ray::new(target - vec3(1.0, 0.0, 1.0), vec3(1.0, 0.0, 1.0)),
-                5.0,
-            ));
-            rays.push((Ray::new(target + Vec3::Y, Vec3::ZERO), f32::INFINITY));
-        }
-        check(&rays, &tris);
-        // And at each hit's own t: the bound is exclusive in both tests.
-        let mut at_hit = Vec::new();
-        for &(ray, _) in &rays {
-            for &[a, b, c] in &tris {
-                if let Some(h) = intersect_triangle_sheared(
-                    &RayShear::new(&ray),
-                    ray.origin,
-                    a,
-                    b,
-                    c,
-                    f32::INFINITY,
-                ) {
-                    at_hit.extend([h.t, h.t.next_up(), h.t.next_down()].map(|t| (ray, t)));
-                }
-            }
-        }
-        assert!(!at_hit.is_empty());
-        check(&at_hit, &tris);
-    }
-
-    #[test]
-    fn lanes_with_a_zero_edge_function_pass_the_prefilter() {
-        // Rays straight down through points on the lines of the triangle's edges beyond
-        // its vertices: one edge function is exactly zero, the others of opposite signs.
-        // The scalar test recomputes those in f64, so the prefilter must not decide them.
-        let p = |x: f32, z: f32| vec3(x, 0.0, z);
-        let mut g = TriGroup::PADDING;
-        g.set_triangle(0, [p(0.0, 0.0), p(1.0, 0.0), p(1.0, 1.0)]);
-        for target in [
-            p(2.0, 0.0),
-            p(-1.0, 0.0),
-            p(1.0, 2.0),
-            p(1.0, -1.0),
-            p(2.0, 2.0),
-        ] {
-            let ray = Ray::new(target + Vec3::Y, -Vec3::Y);
-            assert_eq!(leaf_hits(&ray, &g, f32::INFINITY).1 & 1, 1, "{target}");
-        }
-    }
-
-    #[test]
-    fn lane_masks_cover_a_leaf_exactly() {
-        for count in 1..=8 {
-            let lanes: u32 = (0..groups_for(count))
-                .map(|i| lane_mask(i, count).count_ones())
-                .sum();
-            assert_eq!(lanes as usize, count);
-        }
-        assert_eq!(lane_mask(1, 5), 1);
-    }
-}
+#[path = "leaf_tests.rs"]
+mod tests;

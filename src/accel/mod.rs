@@ -10,6 +10,7 @@
 //! - [`bvh`] and [`build`]: a flat depth-first BVH with binned-SAH and median builders.
 //! - [`traverse`]: closest-hit and any-hit traversal of that BVH.
 //! - [`wide`]: that BVH collapsed to 8-wide nodes with triangles in leaf order, for the render.
+//! - `wide_query`: the wide BVH's closest-hit and any-hit queries, one clone per instruction set.
 //! - [`leaf`]: the wide BVH's leaf triangles in SIMD groups, with a vectorised prefilter.
 //! - [`instance`]: a two-level BVH, one wide BVH per mesh shared by its instances.
 
@@ -24,6 +25,8 @@ pub mod sphere;
 pub mod traverse;
 pub mod triangle;
 pub mod wide;
+pub mod wide_node;
+mod wide_query;
 
 pub use aabb::Aabb;
 pub use bvh::{Bvh, BvhNode, SplitMethod};

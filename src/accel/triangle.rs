@@ -264,8 +264,45 @@ fn t_in_f64(s: &RayShear, origin: Vec3, v: [Vec3; 3]) -> Option<f64> {
     (t > 3.0 * bound).then_some(t)
 }
 
+/// The hit distance [`intersect_triangle_sheared`] computes before its f64 recheck and
+/// its bound on that t's rounding error (the recheck runs when t <= 3 bound), for a
+/// ray that meets the triangle with no zero edge function; for tests of bounds on it.
+#[cfg(test)]
+pub(super) fn t_and_error(s: &RayShear, origin: Vec3, v: [Vec3; 3]) -> Option<(f32, f64)> {
+    let [a, b, c] = v.map(|p| (p - origin).to_array());
+    let (kx, ky, kz) = (s.kx, s.ky, s.kz);
+    let [ax, ay, bx, by, cx, cy] = [
+        a[kx] - s.sx * a[kz],
+        a[ky] - s.sy * a[kz],
+        b[kx] - s.sx * b[kz],
+        b[ky] - s.sy * b[kz],
+        c[kx] - s.sx * c[kz],
+        c[ky] - s.sy * c[kz],
+    ];
+    let e = [cx * by - cy * bx, ax * cy - ay * cx, bx * ay - by * ax];
+    if e.contains(&0.0) || (e.iter().any(|&e| e < 0.0) && e.iter().any(|&e| e > 0.0)) {
+        return None;
+    }
+    let inv_det = 1.0 / (e[0] + e[1] + e[2]);
+    let z = [s.sz * a[kz], s.sz * b[kz], s.sz * c[kz]];
+    let t = (e[0] * z[0] + e[1] * z[1] + e[2] * z[2]) * inv_det;
+    let widen = |v: [f32; 3]| v.map(f64::from);
+    let bound = t_error(
+        s,
+        [a, b, c].map(widen),
+        [ax, ay, bx, by, cx, cy].map(f64::from),
+        widen(e),
+        widen(z),
+        f64::from(t),
+        f64::from(inv_det),
+        F32_UNIT_ROUNDOFF,
+    );
+    Some((t, bound))
+}
+
 /// True when the three vertices are exactly collinear (or coincide).
-fn is_degenerate(v0: Vec3, v1: Vec3, v2: Vec3) -> bool {
+#[inline(always)]
+pub(super) fn is_degenerate(v0: Vec3, v1: Vec3, v2: Vec3) -> bool {
     let e1 = v1.as_dvec3() - v0.as_dvec3();
     let e2 = v2.as_dvec3() - v0.as_dvec3();
     e1.cross(e2) == glam::DVec3::ZERO

@@ -14,66 +14,14 @@
 //! closest hit is the binary tree's, up to which of two triangles at exactly the
 //! same t is met first.
 
+use super::bvh::{Bvh, MAX_DEPTH};
+use super::leaf::{LANES, LeafTris};
+use super::wide_node::{EMPTY, RayBoxes, collapse_node, leaf_lanes};
+pub use super::wide_node::{WIDTH, WideNode};
+use super::wide_query::LeafVisitor;
+use super::{Aabb, BOX_MARGIN, Ray};
 use arrayvec::ArrayVec;
 use glam::Vec3;
-use multiversion::multiversion;
-use wide::{f32x8, u32x8};
-
-use super::bvh::{Bvh, MAX_DEPTH};
-use super::leaf::{LeafTris, RayLeaf, groups_for, lane_mask};
-use super::triangle::{RayShear, TriangleHit, intersect_triangle_sheared};
-use super::{Aabb, BOX_MARGIN, Ray};
-
-/// Children per node. Eight beat four on the 100k torus (callgrind: 9-10% fewer
-/// instructions per ray; 4-6% less time) at 68 rather than 59 bytes per triangle.
-pub const WIDTH: usize = 8;
-
-/// `child` of an unused slot.
-const EMPTY: u32 = u32::MAX;
-
-/// A node of up to `WIDTH` children; box planes are SoA: `bounds[axis][lane]` for the
-/// minimum corner (axis 0..3) and `bounds[3 + axis][lane]` for the maximum.
-#[derive(Clone, Copy, Debug, PartialEq)]
-#[repr(C, align(64))]
-pub struct WideNode {
-    /// Child boxes: min x, y, z then max x, y, z, one lane per child.
-    pub bounds: [[f32; WIDTH]; 6],
-    /// Interior child: its node index. Leaf child: its first group in `leaves`. Unused: `u32::MAX`.
-    pub child: [u32; WIDTH],
-    /// Triangles of a leaf child; 0 for an interior or unused child.
-    pub count: [u32; WIDTH],
-}
-
-impl WideNode {
-    const UNUSED: WideNode = WideNode {
-        bounds: [
-            [f32::INFINITY; WIDTH],
-            [f32::INFINITY; WIDTH],
-            [f32::INFINITY; WIDTH],
-            [f32::NEG_INFINITY; WIDTH],
-            [f32::NEG_INFINITY; WIDTH],
-            [f32::NEG_INFINITY; WIDTH],
-        ],
-        child: [EMPTY; WIDTH],
-        count: [0; WIDTH],
-    };
-
-    /// The box of child `lane`.
-    pub fn child_bounds(&self, lane: usize) -> Aabb {
-        let b = &self.bounds;
-        Aabb {
-            min: Vec3::new(b[0][lane], b[1][lane], b[2][lane]),
-            max: Vec3::new(b[3][lane], b[4][lane], b[5][lane]),
-        }
-    }
-
-    fn set_child_bounds(&mut self, lane: usize, a: Aabb) {
-        for axis in 0..3 {
-            self.bounds[axis][lane] = a.min[axis];
-            self.bounds[3 + axis][lane] = a.max[axis];
-        }
-    }
-}
 
 /// A `WIDTH`-wide BVH with its triangles in leaf order; root at node 0.
 #[derive(Clone, Debug, Default)]
@@ -84,6 +32,9 @@ pub struct WideBvh {
     pub leaves: LeafTris,
     /// The caller's index of each triangle slot, in leaf order.
     pub prims: Vec<u32>,
+    /// Where each of the caller's triangles sits in `leaves`: `group * LANES + lane`,
+    /// so that its vertices are read from there instead of from a second copy.
+    pub prim_lanes: Vec<u32>,
     /// Bounds of everything.
     pub bounds: Aabb,
     /// Levels of nodes below the root's (at most the binary tree's depth).
@@ -97,59 +48,6 @@ const STACK_SIZE: usize = (WIDTH - 1) * MAX_DEPTH as usize + 1;
 /// The traversal stack: on the call stack and never initialised (an `ArrayVec`
 /// writes only what is pushed), so its size costs nothing per ray.
 type Stack = ArrayVec<(u32, f32), STACK_SIZE>;
-
-/// The per-ray constants of the wide slab test.
-struct RayBoxes {
-    origin: [f32; 3],
-    inv_dir: [f32; 3],
-    /// Row of `WideNode::bounds` holding each axis's near plane, then the far plane's.
-    near: [usize; 3],
-    far: [usize; 3],
-}
-
-impl RayBoxes {
-    fn new(ray: &Ray) -> RayBoxes {
-        let inv = ray.dir.recip();
-        let neg = |a: usize| inv[a].is_sign_negative() as usize;
-        RayBoxes {
-            origin: ray.origin.to_array(),
-            inv_dir: inv.to_array(),
-            near: [3 * neg(0), 1 + 3 * neg(1), 2 + 3 * neg(2)],
-            far: [3 - 3 * neg(0), 4 - 3 * neg(1), 5 - 3 * neg(2)],
-        }
-    }
-
-    /// Entry distance of each child box (lanes the ray misses hold junk) and the
-    /// mask of lanes whose box the ray meets in [0, t_max]. The same arithmetic
-    /// as [`Aabb::intersect_ray`], lane by lane, in loops without branches so
-    /// that they compile to SIMD, and the mask through `wide` (a movemask: LLVM
-    /// turns the plain loop into a tangle of shuffles).
-    #[inline(always)]
-    fn test(&self, node: &WideNode, t_max: f32) -> ([f32; WIDTH], u32) {
-        let b = &node.bounds;
-        let (o, inv) = (self.origin, self.inv_dir);
-        let mut t_near = [0.0f32; WIDTH];
-        let mut t_far = [0.0f32; WIDTH];
-        for lane in 0..WIDTH {
-            let near_x = (b[self.near[0]][lane] - o[0]) * inv[0];
-            let near_y = (b[self.near[1]][lane] - o[1]) * inv[1];
-            let near_z = (b[self.near[2]][lane] - o[2]) * inv[2];
-            let far_x = (b[self.far[0]][lane] - o[0]) * inv[0];
-            let far_y = (b[self.far[1]][lane] - o[1]) * inv[1];
-            let far_z = (b[self.far[2]][lane] - o[2]) * inv[2];
-            t_near[lane] = 0.0f32.max(near_x).max(near_y).max(near_z);
-            t_far[lane] = t_max.min(far_x).min(far_y).min(far_z) * BOX_MARGIN;
-        }
-        let hit = f32x8::from(t_near).simd_le(f32x8::from(t_far));
-        (t_near, hit.to_bitmask())
-    }
-}
-
-/// The lanes of `node` holding leaves.
-#[inline(always)]
-fn leaf_lanes(node: &WideNode) -> u32 {
-    !u32x8::from(node.count).simd_eq(u32x8::ZERO).to_bitmask() & ((1 << WIDTH) - 1)
-}
 
 /// Sort key of lane `lane` entered at `t` (not NaN, not below zero): ordered by t
 /// then lane, as the bits of a non-negative f32 are ordered like the f32.
@@ -181,10 +79,12 @@ impl WideBvh {
         let mut nodes = Vec::with_capacity(bvh.nodes.len() / 2 + 1);
         let depth = collapse_node(bvh, 0, 0, &mut nodes).1;
         let leaves = LeafTris::build(&mut nodes, &prims, positions);
+        let prim_lanes = prim_lanes(&nodes, &leaves, &prims);
         WideBvh {
             nodes,
             leaves,
             prims,
+            prim_lanes,
             bounds: bvh.bounds(),
             depth,
         }
@@ -195,19 +95,34 @@ impl WideBvh {
         size_of_val(self.nodes.as_slice())
             + self.leaves.bytes()
             + size_of_val(self.prims.as_slice())
+            + size_of_val(self.prim_lanes.as_slice())
+    }
+
+    /// The vertices of the caller's triangle `prim`, read from its leaf group.
+    #[inline]
+    pub fn triangle(&self, prim: u32) -> [Vec3; 3] {
+        let at = self.prim_lanes[prim as usize] as usize;
+        self.leaves.groups[at / LANES].triangle(at % LANES)
+    }
+
+    /// The vertices of every triangle, in the caller's order.
+    pub fn positions(&self) -> Vec<[Vec3; 3]> {
+        (0..self.prim_lanes.len() as u32)
+            .map(|p| self.triangle(p))
+            .collect()
     }
 
     /// Visits leaves in near-to-far order of their boxes' entry distances while
     /// they start before `*t_max` (`NEAREST_FIRST`), or each node's leaves before
     /// its interior children without sorting (for any-hit queries, where order does
-    /// not decide the answer); `leaf(first, count, t_max)` may lower `t_max` and
-    /// returns true to stop. Returns whether a leaf stopped it.
+    /// not decide the answer); `visitor.leaf(first, count, t_max)` may lower `t_max`
+    /// and returns true to stop. Returns whether a leaf stopped it.
     #[inline(always)]
-    fn traverse<const NEAREST_FIRST: bool>(
+    pub(super) fn traverse<const NEAREST_FIRST: bool>(
         &self,
         ray: &Ray,
         t_max: &mut f32,
-        mut leaf: impl FnMut(usize, usize, &mut f32) -> bool,
+        visitor: &mut impl LeafVisitor,
     ) -> bool {
         if self.nodes.is_empty()
             || self
@@ -238,7 +153,7 @@ impl WideBvh {
                     let lane = leaves.trailing_zeros() as usize;
                     leaves &= leaves - 1;
                     let (child, count) = (node.child[lane], node.count[lane]);
-                    if leaf(child as usize, count as usize, t_max) {
+                    if visitor.leaf(child as usize, count as usize, t_max) {
                         return true;
                     }
                 }
@@ -308,114 +223,9 @@ impl WideBvh {
                 leaves &= !(1 << lane);
                 let lane = lane as usize;
                 let (child, count) = (node.child[lane], node.count[lane]);
-                if t[lane] <= *t_max * BOX_MARGIN && leaf(child as usize, count as usize, t_max) {
-                    return true;
-                }
-            }
-        }
-        false
-    }
-
-    /// The closest hit in (0, t_max): the caller's triangle index and the hit. Of
-    /// triangles hit at exactly the same t (where two meet), the lowest index wins,
-    /// whatever order the traversal meets them in.
-    pub fn closest_hit(&self, ray: &Ray, t_max: f32) -> Option<(u32, TriangleHit)> {
-        closest_hit_dispatched(self, ray, t_max)
-    }
-
-    /// [`Self::closest_hit`] compiled for whatever target features the caller has.
-    #[inline(always)]
-    fn closest_hit_inlined(&self, ray: &Ray, t_max: f32) -> Option<(u32, TriangleHit)> {
-        let shear = RayShear::new(ray);
-        let pre = RayLeaf::new(ray, &shear);
-        let mut best: Option<(u32, TriangleHit)> = None;
-        let limit = t_max;
-        let mut t_max = t_max;
-        // Past the best t so far by more than the rounding of the triangle test's scaled
-        // early-out (t_scaled against bound * det, three roundings): then every triangle
-        // with t at or below the best passes it whatever the order of the leaves, and the
-        // comparison below alone decides, so the hit is the least (t, index) of the
-        // triangles hit before `limit`. It changes only with the best hit.
-        let mut bound = limit;
-        self.traverse::<true>(ray, &mut t_max, |group, count, t_max| {
-            self.leaf_hits(
-                ray,
-                &shear,
-                &pre,
-                group,
-                count,
-                &mut bound,
-                |p, h, bound| {
-                    if best.is_none_or(|(bp, bh)| h.t < bh.t || (h.t == bh.t && p < bp)) {
-                        *t_max = h.t;
-                        *bound = h.t.next_up().next_up().next_up().min(limit);
-                        best = Some((p, *h));
-                    }
-                    false
-                },
-            )
-        });
-        best
-    }
-
-    /// Visits triangles the ray meets in (0, t_max), in no particular order, until
-    /// `visit(prim, hit)` returns true (stop); returns whether it stopped.
-    pub fn any_hit(
-        &self,
-        ray: &Ray,
-        t_max: f32,
-        visit: impl FnMut(u32, &TriangleHit) -> bool,
-    ) -> bool {
-        any_hit_dispatched(self, ray, t_max, visit)
-    }
-
-    /// [`Self::any_hit`] compiled for whatever target features the caller has.
-    #[inline(always)]
-    fn any_hit_inlined(
-        &self,
-        ray: &Ray,
-        t_max: f32,
-        mut visit: impl FnMut(u32, &TriangleHit) -> bool,
-    ) -> bool {
-        let shear = RayShear::new(ray);
-        let pre = RayLeaf::new(ray, &shear);
-        let (mut t, mut bound) = (t_max, t_max);
-        self.traverse::<false>(ray, &mut t, |group, count, _| {
-            self.leaf_hits(ray, &shear, &pre, group, count, &mut bound, |p, h, _| {
-                visit(p, h)
-            })
-        })
-    }
-
-    /// Tests the triangles of the leaf at `group` with `count` triangles: the SoA
-    /// prefilter, then the exact test on each lane it keeps, both against `*bound`;
-    /// `hit(prim, hit, bound)` may lower the bound and returns true to stop.
-    #[allow(clippy::too_many_arguments)]
-    #[inline(always)]
-    fn leaf_hits(
-        &self,
-        ray: &Ray,
-        shear: &RayShear,
-        pre: &RayLeaf,
-        group: usize,
-        count: usize,
-        bound: &mut f32,
-        mut hit: impl FnMut(u32, &TriangleHit, &mut f32) -> bool,
-    ) -> bool {
-        for i in 0..groups_for(count) {
-            let g = &self.leaves.groups[group + i];
-            // The bound only falls within the group, so the group's first bound lets
-            // through every lane a later, lower one accepts.
-            let mut lanes = pre.candidates(g, *bound) & lane_mask(i, count);
-            while lanes != 0 {
-                let lane = lanes.trailing_zeros() as usize;
-                lanes &= lanes - 1;
-                let [a, b, c] = g.triangle(lane);
-                let Some(h) = intersect_triangle_sheared(shear, ray.origin, a, b, c, *bound) else {
-                    continue;
-                };
-                let p = self.prims[self.leaves.first[group + i] as usize + lane];
-                if hit(p, &h, bound) {
+                if t[lane] <= *t_max * BOX_MARGIN
+                    && visitor.leaf(child as usize, count as usize, t_max)
+                {
                     return true;
                 }
             }
@@ -430,14 +240,15 @@ impl WideBvh {
     /// `prims` without gaps or overlap, slot `k` holding `positions[prims[k]]` and
     /// padding lanes NaN; every group belongs to a leaf; a child box contains its
     /// node's children's boxes, a leaf box its triangles; `bounds` contains the root's
-    /// children; unused slots have no box; no node lies deeper than `depth`.
+    /// children; unused slots have no box; no node lies deeper than `depth`;
+    /// `prim_lanes` leads each triangle to its own vertices.
     pub fn validate(&self, positions: &[[Vec3; 3]]) -> Result<(), String> {
         let n = positions.len();
         if self.prims.len() != n {
             return Err(format!("{} prims for {n} triangles", self.prims.len()));
         }
         if self.nodes.is_empty() {
-            return if n == 0 {
+            return if n == 0 && self.prim_lanes.is_empty() {
                 Ok(())
             } else {
                 Err(format!("no nodes for {n} triangles"))
@@ -513,72 +324,41 @@ impl WideBvh {
         if let Some(g) = used.iter().position(|u| !u) {
             return Err(format!("triangle group {g} is in no leaf"));
         }
+        if self.prim_lanes.len() != n {
+            return Err(format!(
+                "{} prim lanes for {n} triangles",
+                self.prim_lanes.len()
+            ));
+        }
+        for (p, lane) in self.prim_lanes.iter().enumerate() {
+            let slot = self
+                .leaves
+                .first
+                .get(*lane as usize / LANES)
+                .map(|f| f + lane % LANES as u32);
+            if slot.and_then(|k| self.prims.get(k as usize)) != Some(&(p as u32)) {
+                return Err(format!(
+                    "prim_lanes[{p}] = {lane} is not triangle {p}'s lane"
+                ));
+            }
+        }
         Ok(())
     }
 }
 
-// Runtime dispatch: one clone of each query per instruction set, the traversal and
-// triangle tests (`#[inline(always)]`) compiled inside each, picked once per process
-// from the CPU's features; no `-C target-cpu` needed. Rust never contracts a * b + c
-// into an FMA by itself, so every clone computes bit-identical results.
-
-/// [`WideBvh::closest_hit`] for the best instruction set the CPU has.
-#[multiversion(targets("x86_64+avx2+fma", "x86_64+sse4.2"))]
-fn closest_hit_dispatched(wide: &WideBvh, ray: &Ray, t_max: f32) -> Option<(u32, TriangleHit)> {
-    wide.closest_hit_inlined(ray, t_max)
-}
-
-/// [`WideBvh::any_hit`] for the best instruction set the CPU has.
-#[multiversion(targets("x86_64+avx2+fma", "x86_64+sse4.2"))]
-fn any_hit_dispatched<F: FnMut(u32, &TriangleHit) -> bool>(
-    wide: &WideBvh,
-    ray: &Ray,
-    t_max: f32,
-    visit: F,
-) -> bool {
-    wide.any_hit_inlined(ray, t_max, visit)
-}
-
-/// Appends the wide node for binary node `b` (and its subtree) at `depth`; returns its
-/// index and the deepest level in its subtree.
-fn collapse_node(bvh: &Bvh, b: usize, depth: u32, out: &mut Vec<WideNode>) -> (u32, u32) {
-    let me = out.len();
-    out.push(WideNode::UNUSED);
-    let first = &bvh.nodes[b];
-    let mut kids: Vec<usize> = if first.is_leaf() {
-        vec![b]
-    } else {
-        vec![b + 1, first.offset as usize]
-    };
-    // Open the interior child of largest area until `WIDTH` children are reached.
-    while kids.len() < WIDTH {
-        let Some(k) = (0..kids.len())
-            .filter(|&k| !bvh.nodes[kids[k]].is_leaf())
-            .max_by(|&x, &y| {
-                let area = |k: usize| bvh.nodes[kids[k]].bounds().surface_area();
-                area(x).total_cmp(&area(y))
-            })
-        else {
-            break;
-        };
-        let open = kids[k];
-        kids[k] = open + 1;
-        kids.insert(k + 1, bvh.nodes[open].offset as usize);
-    }
-    let mut deepest = depth;
-    for (lane, &k) in kids.iter().enumerate() {
-        let node = bvh.nodes[k];
-        out[me].set_child_bounds(lane, node.bounds());
-        if node.is_leaf() {
-            out[me].child[lane] = node.offset;
-            out[me].count[lane] = node.count;
-        } else {
-            let (child, d) = collapse_node(bvh, k, depth + 1, out);
-            out[me].child[lane] = child;
-            deepest = deepest.max(d);
+/// `WideBvh::prim_lanes` of the leaves `nodes` point to in `leaves`, whose slots hold `prims`.
+fn prim_lanes(nodes: &[WideNode], leaves: &LeafTris, prims: &[u32]) -> Vec<u32> {
+    let mut lanes = vec![0; prims.len()];
+    for node in nodes {
+        for lane in 0..WIDTH {
+            let (group, count) = (node.child[lane] as usize, node.count[lane] as usize);
+            for i in 0..count {
+                let slot = leaves.first[group] as usize + i;
+                lanes[prims[slot] as usize] = (group * LANES + i) as u32;
+            }
         }
     }
-    (me as u32, deepest)
+    lanes
 }
 
 #[cfg(test)]

@@ -1,7 +1,8 @@
 //! Tests of the wide BVH against the binary tree and brute force.
 
 use super::*;
-use crate::accel::SplitMethod;
+use crate::accel::triangle::{RayShear, TriangleHit, intersect_triangle_sheared};
+use crate::accel::{BvhNode, SplitMethod};
 use crate::test_util::Lcg;
 use glam::vec3;
 
@@ -354,4 +355,124 @@ fn exact_ties_on_box_faces_go_to_the_lowest_index() {
         checked > 3000 && ties > 300,
         "{checked} rays checked, {ties} exact ties"
     );
+}
+
+#[test]
+fn each_triangle_reads_its_own_vertices_from_the_leaves() {
+    for tris in [random_tris(1, 8), random_tris(2000, 9), grid(9)] {
+        let (_, wide) = both(&tris, SplitMethod::SahBinned);
+        for (p, tri) in tris.iter().enumerate() {
+            assert_eq!(wide.triangle(p as u32), *tri);
+        }
+        assert_eq!(wide.positions(), tris);
+    }
+    // Without acceleration: one leaf of many groups.
+    let tris = random_tris(37, 10);
+    let bounds: Vec<Aabb> = tris.iter().map(|t| Aabb::from_points(t)).collect();
+    let wide = WideBvh::collapse(&Bvh::single_leaf(&bounds), &tris);
+    wide.validate(&tris).unwrap();
+    assert_eq!(wide.positions(), tris);
+}
+
+#[test]
+fn validate_catches_a_wrong_prim_lane() {
+    let tris = random_tris(300, 11);
+    let (_, wide) = both(&tris, SplitMethod::SahBinned);
+    let mut bad = wide.clone();
+    bad.prim_lanes.swap(0, 1);
+    assert!(bad.validate(&tris).is_err());
+    let mut bad = wide.clone();
+    bad.prim_lanes.pop();
+    assert!(bad.validate(&tris).is_err());
+}
+
+/// The collapse as first written (a `Vec` of children per node, `insert`), which the
+/// allocation-free one must match node for node.
+fn reference_collapse(bvh: &Bvh, b: usize, out: &mut Vec<WideNode>) -> u32 {
+    let me = out.len();
+    out.push(WideNode::UNUSED);
+    let first = &bvh.nodes[b];
+    let mut kids: Vec<usize> = if first.is_leaf() {
+        vec![b]
+    } else {
+        vec![b + 1, first.offset as usize]
+    };
+    while kids.len() < WIDTH {
+        let Some(k) = (0..kids.len())
+            .filter(|&k| !bvh.nodes[kids[k]].is_leaf())
+            .max_by(|&x, &y| {
+                let area = |k: usize| bvh.nodes[kids[k]].bounds().surface_area();
+                area(x).total_cmp(&area(y))
+            })
+        else {
+            break;
+        };
+        let open = kids[k];
+        kids[k] = open + 1;
+        kids.insert(k + 1, bvh.nodes[open].offset as usize);
+    }
+    for (lane, &k) in kids.iter().enumerate() {
+        let node = bvh.nodes[k];
+        out[me].set_child_bounds(lane, node.bounds());
+        if node.is_leaf() {
+            out[me].child[lane] = node.offset;
+            out[me].count[lane] = node.count;
+        } else {
+            out[me].child[lane] = reference_collapse(bvh, k, out);
+        }
+    }
+    me as u32
+}
+
+#[test]
+fn the_collapse_opens_the_same_children_as_the_reference() {
+    for (tris, split) in [
+        (random_tris(1, 12), SplitMethod::SahBinned),
+        (random_tris(3000, 13), SplitMethod::SahBinned),
+        (random_tris(3000, 14), SplitMethod::Median),
+        (grid(24), SplitMethod::SahBinned),
+        (grid(16), SplitMethod::Median),
+    ] {
+        let bounds: Vec<Aabb> = tris.iter().map(|t| Aabb::from_points(t)).collect();
+        let bvh = Bvh::build(&bounds, split);
+        let (mut got, mut expect) = (Vec::new(), Vec::new());
+        super::collapse_node(&bvh, 0, 0, &mut got);
+        reference_collapse(&bvh, 0, &mut expect);
+        assert_eq!(got, expect);
+    }
+    // Every box the same: each opening is a tie among several, which goes to the last,
+    // and a leaf beside the root's subtree leaves room to open only some of them.
+    fn full(depth: u32, nodes: &mut Vec<BvhNode>, prims: &mut u32) {
+        let unit = Aabb {
+            min: Vec3::ZERO,
+            max: Vec3::ONE,
+        };
+        let me = nodes.len();
+        nodes.push(BvhNode::leaf(unit, *prims, 1));
+        if depth == 0 {
+            *prims += 1;
+            return;
+        }
+        nodes[me].count = 0;
+        full(depth - 1, nodes, prims);
+        nodes[me].offset = nodes.len() as u32;
+        full(depth - 1, nodes, prims);
+    }
+    let mut bvh = Bvh::default();
+    let mut prims = 0;
+    full(5, &mut bvh.nodes, &mut prims);
+    // The root's first child becomes a leaf: cut its subtree out.
+    let (first, second) = (1, bvh.nodes[0].offset as usize);
+    bvh.nodes.drain(first + 1..second);
+    bvh.nodes[0].offset = first as u32 + 1;
+    bvh.nodes[first].count = 1;
+    for node in &mut bvh.nodes[first + 1..] {
+        if !node.is_leaf() {
+            node.offset -= (second - first - 1) as u32;
+        }
+    }
+    let (mut got, mut expect) = (Vec::new(), Vec::new());
+    super::collapse_node(&bvh, 0, 0, &mut got);
+    reference_collapse(&bvh, 0, &mut expect);
+    assert_eq!(got, expect);
 }

@@ -77,11 +77,11 @@ pub struct TriangleData {
     pub transform_error: Vec3,
 }
 
-/// World-space geometry in flat arrays, and one BVH per primitive kind.
+/// World-space geometry in flat arrays, and one BVH per primitive kind. The flattened
+/// triangles' vertex positions are held once, in `tri_wide`'s leaves
+/// ([`SceneGeometry::positions`]).
 #[derive(Resource, Clone, Debug, Default)]
 pub struct SceneGeometry {
-    /// Triangle vertex positions.
-    pub tri_positions: Vec<[Vec3; 3]>,
     /// Triangle vertex normals (unit).
     pub tri_normals: Vec<[Vec3; 3]>,
     /// Triangle vertex texture coordinates.
@@ -92,7 +92,7 @@ pub struct SceneGeometry {
     /// only for observers (see [`RenderPlan::binary_triangle_bvh`]), else empty.
     pub tri_bvh: Bvh,
     /// `tri_bvh` collapsed to 8-wide nodes with the triangles in leaf order: what
-    /// unobserved queries traverse (empty: they use `tri_bvh`).
+    /// unobserved queries traverse, and where every query reads a triangle's vertices.
     pub tri_wide: WideBvh,
     /// Spheres (world space).
     pub spheres: Vec<Sphere>,
@@ -138,6 +138,8 @@ pub fn build_triangle_bvh(
     mut stats: ResMut<RenderStats>,
 ) {
     let g = &mut *geometry;
+    // Kept until the wide tree holds them.
+    let mut positions: Vec<[Vec3; 3]> = Vec::new();
     let uses = mesh_uses(meshes.iter().map(|(m, _, _)| m));
     // Without acceleration every triangle is tested against every ray, instances too:
     // a top-level BVH would be acceleration the setting asks to leave out.
@@ -169,8 +171,7 @@ pub fn build_triangle_bvh(
         let v = &mesh.data.vertices;
         for t in &mesh.data.triangles {
             let [a, b, c] = t.map(|i| &v[i as usize]);
-            g.tri_positions
-                .push([a, b, c].map(|v| m.transform_point3(v.position)));
+            positions.push([a, b, c].map(|v| m.transform_point3(v.position)));
             g.tri_normals.push([a, b, c].map(|v| {
                 (normal_from_object * glam::Vec3A::from(v.normal))
                     .try_normalize()
@@ -180,21 +181,18 @@ pub fn build_triangle_bvh(
             g.tri_material.push(material);
         }
     }
-    let bounds: Vec<Aabb> = g
-        .tri_positions
-        .iter()
-        .map(|p| Aabb::from_points(p))
-        .collect();
+    let bounds: Vec<Aabb> = positions.iter().map(|p| Aabb::from_points(p)).collect();
     let flattened = bounds.len();
     let bvh = build(&bounds, &settings);
     // Freed before the wide tree is made, when memory peaks (both trees are alive).
     drop(bounds);
     if plan.binary_triangle_bvh {
         g.tri_bvh = bvh;
-        g.collapse_triangle_bvh();
+        g.collapse_triangle_bvh(&positions);
     } else {
-        g.tri_wide = WideBvh::collapse_owned(bvh, &g.tri_positions);
+        g.tri_wide = WideBvh::collapse_owned(bvh, &positions);
     }
+    drop(positions);
     let bottom: Vec<WideBvh> = g
         .instanced_meshes
         .iter()
@@ -253,9 +251,26 @@ pub fn build_sphere_bvh(
 }
 
 impl SceneGeometry {
-    /// Makes `tri_wide` from `tri_bvh` and `tri_positions`.
-    pub fn collapse_triangle_bvh(&mut self) {
-        self.tri_wide = WideBvh::collapse(&self.tri_bvh, &self.tri_positions);
+    /// Makes `tri_wide` from `tri_bvh` and the flattened triangles' `positions`, which
+    /// it then holds.
+    pub fn collapse_triangle_bvh(&mut self, positions: &[[Vec3; 3]]) {
+        self.tri_wide = WideBvh::collapse(&self.tri_bvh, positions);
+    }
+
+    /// The vertices of flattened triangle `prim`.
+    #[inline]
+    pub fn positions(&self, prim: u32) -> [Vec3; 3] {
+        self.tri_wide.triangle(prim)
+    }
+
+    /// The vertices of every flattened triangle, in order.
+    pub fn all_positions(&self) -> Vec<[Vec3; 3]> {
+        self.tri_wide.positions()
+    }
+
+    /// Flattened triangles (those of meshes used once).
+    pub fn triangles_flattened(&self) -> usize {
+        self.tri_wide.prims.len()
     }
 
     /// Whether queries observed by `V` traverse the wide triangle BVH: unobserved ones,
@@ -287,7 +302,7 @@ impl SceneGeometry {
             // lower index), so the last one passed on is the winner.
             let mut last: Option<(u32, TriangleHit)> = None;
             let found = self.tri_bvh.closest_hit(ray, t_max, visitor, |p, tm| {
-                let [a, b, c] = self.tri_positions[p as usize];
+                let [a, b, c] = self.positions(p);
                 let h = intersect_triangle_sheared(&shear, ray.origin, a, b, c, tm)?;
                 let keep = last.is_none_or(|(lp, lh)| h.t < lh.t || (h.t == lh.t && p < lp));
                 keep.then(|| {
@@ -339,7 +354,7 @@ impl SceneGeometry {
             !self.tri_bvh.nodes.is_empty() && {
                 let shear = RayShear::new(ray);
                 self.tri_bvh.any_hit(ray, t_max, visitor, |p| {
-                    let [a, b, c] = self.tri_positions[p as usize];
+                    let [a, b, c] = self.positions(p);
                     intersect_triangle_sheared(&shear, ray.origin, a, b, c, t_max).is_some()
                 })
             }
@@ -383,7 +398,7 @@ impl SceneGeometry {
             !self.tri_bvh.nodes.is_empty() && {
                 let shear = RayShear::new(ray);
                 self.tri_bvh.any_hit(ray, t_max, visitor, |p| {
-                    let [a, b, c] = self.tri_positions[p as usize];
+                    let [a, b, c] = self.positions(p);
                     intersect_triangle_sheared(&shear, ray.origin, a, b, c, t_max)
                         .is_some_and(|h| cross(self.tri_material[p as usize], &|| flat(p), &h))
                 })
@@ -438,17 +453,17 @@ impl SceneGeometry {
 
     /// Triangles drawn: the flattened ones and every instance's.
     pub fn triangles_drawn(&self) -> u64 {
-        self.tri_positions.len() as u64 + self.instanced.triangles_drawn()
+        self.triangles_flattened() as u64 + self.instanced.triangles_drawn()
     }
 
     /// Triangles stored: the flattened ones and each instanced mesh's once.
     pub fn triangles_stored(&self) -> u64 {
         let instanced: usize = self.instanced.meshes.iter().map(|m| m.prims.len()).sum();
-        (self.tri_positions.len() + instanced) as u64
+        (self.triangles_flattened() + instanced) as u64
     }
 
     /// Bytes the render's triangle queries read: the wide BVH (nodes, triangle data,
-    /// indices) and the flattened positions, and for instanced meshes their BVHs, the
+    /// which holds the flattened positions, indices), and for instanced meshes their BVHs, the
     /// top level, the instances and the meshes' vertices and indices.
     pub fn triangle_bytes(&self) -> usize {
         let meshes: usize = self
@@ -456,10 +471,7 @@ impl SceneGeometry {
             .iter()
             .map(|m| size_of_val(m.vertices.as_slice()) + size_of_val(m.triangles.as_slice()))
             .sum();
-        self.tri_wide.bytes()
-            + size_of_val(self.tri_positions.as_slice())
-            + self.instanced.bytes()
-            + meshes
+        self.tri_wide.bytes() + self.instanced.bytes() + meshes
     }
 
     /// The texture coordinates of triangle `prim` of the mesh of `instance`.
@@ -474,7 +486,7 @@ impl SceneGeometry {
         let i = hit.prim as usize;
         let Some(instance) = hit.instance else {
             return TriangleData {
-                positions: self.tri_positions[i],
+                positions: self.positions(hit.prim),
                 normals: self.tri_normals[i],
                 texcoords: self.tri_texcoords[i],
                 material: self.tri_material[i],

@@ -248,7 +248,7 @@ fn build_triangle_bvh_puts_world_space_triangles_in_a_bvh() {
     run(&mut world, build_triangle_bvh);
     let g = world.resource::<SceneGeometry>();
     assert_eq!(
-        g.tri_positions,
+        g.all_positions(),
         vec![[
             Vec3::new(0.0, 0.0, -2.0),
             Vec3::new(1.0, 0.0, -2.0),

@@ -65,7 +65,7 @@ pub fn emit_bvh(mut spawner: Spawner, log: Res<DebugTrace>, geometry: Res<SceneG
     let mut seen = HashSet::new();
     for v in &r.traversal.prims {
         let points: Vec<Vec3> = match v.kind {
-            PrimKind::Triangle => geometry.tri_positions[v.index as usize].to_vec(),
+            PrimKind::Triangle => geometry.positions(v.index).to_vec(),
             PrimKind::Sphere => vec![geometry.spheres[v.index as usize].center],
         };
         for p in points {

@@ -42,7 +42,6 @@ pub fn geometry_of(
         })
         .collect();
     let mut g = SceneGeometry {
-        tri_positions: tris.to_vec(),
         tri_normals: tris.iter().map(|_| [Vec3::Z; 3]).collect(),
         tri_texcoords: tris.iter().map(|_| [Vec2::ZERO; 3]).collect(),
         tri_material: vec![0; tris.len()],
@@ -53,7 +52,7 @@ pub fn geometry_of(
         ..Default::default()
     };
     // The render's queries traverse the wide BVH: stress it too.
-    g.collapse_triangle_bvh();
+    g.collapse_triangle_bvh(tris);
     g
 }
 
@@ -435,10 +434,11 @@ pub fn degenerate(b: &Budget) -> Vec<Row> {
         return vec![Row::error(case, e)];
     }
     let g = renderer.world.resource::<SceneGeometry>();
-    let degenerate: Vec<bool> = g.tri_positions.iter().map(degenerate_tri).collect();
+    let positions = g.all_positions();
+    let degenerate: Vec<bool> = positions.iter().map(degenerate_tri).collect();
     let mut rng = Lcg(5);
     let mut rays = Vec::new();
-    for (i, t) in g.tri_positions.iter().enumerate() {
+    for (i, t) in positions.iter().enumerate() {
         for k in 0..b.rays / 64 {
             let target = match k % 4 {
                 0 => t[k % 3],

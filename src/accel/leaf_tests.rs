@@ -1,0 +1,221 @@
+//! Tests of the leaf prefilter and its decided lanes against the scalar triangle test.
+
+use super::*;
+use crate::accel::triangle::t_and_error;
+use crate::test_util::Lcg;
+use glam::vec3;
+
+/// Each lane's hit as the wide BVH's leaves compute it: prefilter, then each lane
+/// that passes decided from its values or by the scalar test. Also returns the
+/// prefilter's mask.
+fn leaf_hits(ray: &Ray, g: &TriGroup, t_max: f32) -> ([Option<TriangleHit>; LANES], u32) {
+    let s = RayShear::new(ray);
+    let candidates = RayLeaf::new(ray, &s).candidates(g, t_max);
+    let mask = candidates.mask;
+    let hits = std::array::from_fn(|lane| {
+        (mask & (1 << lane) != 0)
+            .then(|| candidates.hit(lane, g.triangle(lane), &s, ray.origin, t_max))
+            .flatten()
+    });
+    (hits, mask)
+}
+
+/// Every lane of every group agrees with the scalar test bit for bit; returns the
+/// lanes the scalar test missed and how many of those the prefilter rejected.
+fn check(rays: &[(Ray, f32)], tris: &[[Vec3; 3]]) -> (usize, usize) {
+    let (mut misses, mut rejected) = (0, 0);
+    for chunk in tris.chunks(LANES) {
+        let mut g = TriGroup::PADDING;
+        for (lane, &tri) in chunk.iter().enumerate() {
+            g.set_triangle(lane, tri);
+        }
+        for &(ray, t_max) in rays {
+            let (hits, mask) = leaf_hits(&ray, &g, t_max);
+            let s = RayShear::new(&ray);
+            for (lane, &[a, b, c]) in chunk.iter().enumerate() {
+                let expect = intersect_triangle_sheared(&s, ray.origin, a, b, c, t_max);
+                let bits =
+                    |h: Option<TriangleHit>| h.map(|h| [h.t, h.b0, h.b1, h.b2].map(f32::to_bits));
+                assert_eq!(
+                    bits(hits[lane]),
+                    bits(expect),
+                    "{ray:?} {t_max} {:?}",
+                    [a, b, c]
+                );
+                if expect.is_none() {
+                    misses += 1;
+                    rejected += (mask & (1 << lane) == 0) as usize;
+                }
+            }
+        }
+    }
+    (misses, rejected)
+}
+
+#[test]
+fn prefilter_and_confirm_match_the_scalar_test_on_random_rays() {
+    let mut rng = Lcg(77);
+    let tris: Vec<[Vec3; 3]> = (0..64)
+        .map(|_| {
+            let c = rng.vec() * 4.0 - Vec3::splat(2.0);
+            [c, c + rng.dir(), c + rng.dir()]
+        })
+        .collect();
+    let rays: Vec<(Ray, f32)> = (0..400)
+        .map(|i| {
+            let mut d = rng.dir() * (0.5 + rng.next_f32());
+            // Zero direction components, one or two of them.
+            if i % 7 == 0 {
+                d[i % 3] = 0.0;
+            }
+            if i % 21 == 0 {
+                d[(i + 1) % 3] = 0.0;
+            }
+            let t_max = [f32::INFINITY, 2.0, 0.5][i % 3];
+            (Ray::new(rng.vec() * 6.0 - Vec3::splat(3.0), d), t_max)
+        })
+        .collect();
+    let (misses, rejected) = check(&rays, &tris);
+    // Not a pass-everything filter: nearly all misses end in the vector pass.
+    assert!(
+        rejected * 10 > misses * 9,
+        "{rejected} of {misses} misses rejected"
+    );
+}
+
+#[test]
+fn edges_vertices_degenerate_and_nan_triangles_match_the_scalar_test() {
+    let p = |x: f32, z: f32| vec3(x, 0.0, z);
+    let tris = [
+        // Two triangles of a unit quad (a shared diagonal) and a neighbour.
+        [p(0.0, 0.0), p(1.0, 0.0), p(1.0, 1.0)],
+        [p(0.0, 0.0), p(1.0, 1.0), p(0.0, 1.0)],
+        [p(1.0, 0.0), p(2.0, 0.0), p(1.0, 1.0)],
+        // Zero area: collinear, and one point.
+        [p(0.0, 0.0), p(0.5, 0.5), p(1.0, 1.0)],
+        [p(0.5, 0.5); 3],
+        // NaN and infinite coordinates.
+        [p(f32::NAN, 0.0), p(1.0, 0.0), p(1.0, 1.0)],
+        [p(0.0, 0.0), p(f32::INFINITY, 0.0), p(1.0, 1.0)],
+        // Thin, far from the origin.
+        [p(1e4, 1e4), p(1e4 + 1e-3, 1e4), p(1e4, 1e4 + 1e-3)],
+    ];
+    let mut rays = Vec::new();
+    // Through vertices, edge midpoints and the diagonal, straight down and slanted.
+    let targets = [0.0, 0.5, 1.0, 2.0]
+        .iter()
+        .flat_map(|&x| [0.0, 0.5, 1.0].iter().map(move |&z| p(x, z)));
+    for target in targets.chain([p(0.25, 0.25), p(0.75, 0.75), p(1e4, 1e4)]) {
+        for dir in [
+            vec3(0.0, -1.0, 0.0),
+            vec3(0.3, -1.0, 0.2),
+            vec3(-0.1, -0.7, 0.4),
+        ] {
+            let origin = target - 2.0 * dir;
+            rays.push((Ray::new(origin, dir), f32::INFINITY));
+            // Bounds at, just below and just past the exact hit distance.
+            for t in [2.0f32, 2.0f32.next_down(), 2.0f32.next_up()] {
+                rays.push((Ray::new(origin, dir), t));
+            }
+        }
+        // In the triangles' plane, and a zero direction.
+        rays.push((Ray::new(target - Vec3::X, Vec3::X), f32::INFINITY));
+        rays.push((
+            Ray::new(target - vec3(1.0, 0.0, 1.0), vec3(1.0, 0.0, 1.0)),
+            5.0,
+        ));
+        rays.push((Ray::new(target + Vec3::Y, Vec3::ZERO), f32::INFINITY));
+    }
+    check(&rays, &tris);
+    // And at each hit's own t: the bound is exclusive in both tests.
+    let mut at_hit = Vec::new();
+    for &(ray, _) in &rays {
+        for &[a, b, c] in &tris {
+            if let Some(h) =
+                intersect_triangle_sheared(&RayShear::new(&ray), ray.origin, a, b, c, f32::INFINITY)
+            {
+                at_hit.extend([h.t, h.t.next_up(), h.t.next_down()].map(|t| (ray, t)));
+            }
+        }
+    }
+    assert!(!at_hit.is_empty());
+    check(&at_hit, &tris);
+}
+
+#[test]
+fn lanes_with_a_zero_edge_function_pass_the_prefilter() {
+    // Rays straight down through points on the lines of the triangle's edges beyond
+    // its vertices: one edge function is exactly zero, the others of opposite signs.
+    // The scalar test recomputes those in f64, so the prefilter must not decide them.
+    let p = |x: f32, z: f32| vec3(x, 0.0, z);
+    let mut g = TriGroup::PADDING;
+    g.set_triangle(0, [p(0.0, 0.0), p(1.0, 0.0), p(1.0, 1.0)]);
+    for target in [
+        p(2.0, 0.0),
+        p(-1.0, 0.0),
+        p(1.0, 2.0),
+        p(1.0, -1.0),
+        p(2.0, 2.0),
+    ] {
+        let ray = Ray::new(target + Vec3::Y, -Vec3::Y);
+        assert_eq!(leaf_hits(&ray, &g, f32::INFINITY).1 & 1, 1, "{target}");
+    }
+}
+
+#[test]
+fn decided_lanes_bound_the_scalar_tests_t_error() {
+    // Hits of random rays, and of grazing rays from points a little off triangles
+    // far from the world origin (small t, large coordinates), long thin triangles
+    // included: the bound the decided lanes use is never below the scalar test's,
+    // and it decides ordinary hits.
+    let mut rng = Lcg(91);
+    let (mut hits, mut decided, mut near) = (0, 0, 0);
+    for i in 0..20_000 {
+        let far = [0.0, 10.0, 1e4][i % 3];
+        let centre = rng.vec() * 4.0 + Vec3::splat(far);
+        let thin = if i % 5 == 0 { 1e-3 } else { 1.0 };
+        let (e1, e2) = (rng.dir() * 4.0, rng.dir() * thin);
+        let tri = [centre, centre + e1, centre + e2];
+        let target = centre + e1 * rng.next_f32() * 0.5 + e2 * rng.next_f32() * 0.5;
+        let ray = if i % 2 == 0 {
+            let d = rng.dir();
+            Ray::new(target - d * (0.5 + 3.0 * rng.next_f32()), d)
+        } else {
+            // From a point 10^-k off the triangle, grazing it.
+            let n = e1.cross(e2).normalize();
+            let along = (e1.normalize() + n * 10f32.powi(-((i % 4) as i32))).normalize();
+            let off = n * 10f32.powi(-1 - (i % 6) as i32);
+            Ray::new(target + off - along * 10f32.powi(-((i % 5) as i32)), along)
+        };
+        let s = RayShear::new(&ray);
+        let Some((t, scalar)) = t_and_error(&s, ray.origin, tri) else {
+            continue;
+        };
+        let mut g = TriGroup::PADDING;
+        g.set_triangle(0, tri);
+        let c = RayLeaf::new(&ray, &s).candidates(&g, f32::INFINITY);
+        assert_eq!(c.zero & 1, 0);
+        let (det, sizes) = (c.det[0], c.sizes.map(|s| s[0]));
+        assert_eq!(c.t_scaled[0] * (1.0 / det), t);
+        let ours = t_error_bound(t, det, sizes);
+        assert!(ours >= scalar, "{ray:?} {tri:?}: {ours} < {scalar}");
+        if t > 0.0 {
+            hits += 1;
+            decided += clear_of_zero(t, det, sizes) as usize;
+            near += (f64::from(t) <= 3.0 * scalar) as usize;
+        }
+    }
+    assert!(hits > 5000 && near > 0, "{hits} hits, {near} near");
+    assert!(decided * 10 > hits * 8, "{decided} of {hits} decided");
+}
+
+#[test]
+fn lane_masks_cover_a_leaf_exactly() {
+    for count in 1..=8 {
+        let lanes: u32 = (0..groups_for(count))
+            .map(|i| lane_mask(i, count).count_ones())
+            .sum();
+        assert_eq!(lanes as usize, count);
+    }
+    assert_eq!(lane_mask(1, 5), 1);
+}

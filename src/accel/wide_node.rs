@@ -1,0 +1,179 @@
+//! The 8-wide BVH's node format: [`WideNode`] (child boxes structure-of-arrays,
+//! so that one slab test covers all eight), the per-ray slab test over a node's
+//! children ([`RayBoxes`]), and the collapse of the binary tree into such nodes.
+
+use glam::Vec3;
+use wide::{f32x8, u32x8};
+
+use super::bvh::Bvh;
+use super::{Aabb, BOX_MARGIN, Ray};
+
+/// Children per node. Eight beat four on the 100k torus (callgrind: 9-10% fewer
+/// instructions per ray; 4-6% less time) at 68 rather than 59 bytes per triangle.
+pub const WIDTH: usize = 8;
+
+/// `child` of an unused slot.
+pub(super) const EMPTY: u32 = u32::MAX;
+
+/// A node of up to `WIDTH` children; box planes are SoA: `bounds[axis][lane]` for the
+/// minimum corner (axis 0..3) and `bounds[3 + axis][lane]` for the maximum.
+#[derive(Clone, Copy, Debug, PartialEq)]
+#[repr(C, align(64))]
+pub struct WideNode {
+    /// Child boxes: min x, y, z then max x, y, z, one lane per child.
+    pub bounds: [[f32; WIDTH]; 6],
+    /// Interior child: its node index. Leaf child: its first group in `leaves`. Unused: `u32::MAX`.
+    pub child: [u32; WIDTH],
+    /// Triangles of a leaf child; 0 for an interior or unused child.
+    pub count: [u32; WIDTH],
+}
+
+impl WideNode {
+    pub(super) const UNUSED: WideNode = WideNode {
+        bounds: [
+            [f32::INFINITY; WIDTH],
+            [f32::INFINITY; WIDTH],
+            [f32::INFINITY; WIDTH],
+            [f32::NEG_INFINITY; WIDTH],
+            [f32::NEG_INFINITY; WIDTH],
+            [f32::NEG_INFINITY; WIDTH],
+        ],
+        child: [EMPTY; WIDTH],
+        count: [0; WIDTH],
+    };
+
+    /// The box of child `lane`.
+    pub fn child_bounds(&self, lane: usize) -> Aabb {
+        let b = &self.bounds;
+        Aabb {
+            min: Vec3::new(b[0][lane], b[1][lane], b[2][lane]),
+            max: Vec3::new(b[3][lane], b[4][lane], b[5][lane]),
+        }
+    }
+
+    pub(super) fn set_child_bounds(&mut self, lane: usize, a: Aabb) {
+        for axis in 0..3 {
+            self.bounds[axis][lane] = a.min[axis];
+            self.bounds[3 + axis][lane] = a.max[axis];
+        }
+    }
+}
+
+/// The per-ray constants of the wide slab test.
+pub(super) struct RayBoxes {
+    origin: [f32; 3],
+    inv_dir: [f32; 3],
+    /// Row of `WideNode::bounds` holding each axis's near plane, then the far plane's.
+    near: [usize; 3],
+    far: [usize; 3],
+}
+
+impl RayBoxes {
+    pub(super) fn new(ray: &Ray) -> RayBoxes {
+        let inv = ray.dir.recip();
+        let neg = |a: usize| inv[a].is_sign_negative() as usize;
+        RayBoxes {
+            origin: ray.origin.to_array(),
+            inv_dir: inv.to_array(),
+            near: [3 * neg(0), 1 + 3 * neg(1), 2 + 3 * neg(2)],
+            far: [3 - 3 * neg(0), 4 - 3 * neg(1), 5 - 3 * neg(2)],
+        }
+    }
+
+    /// Entry distance of each child box (lanes the ray misses hold junk) and the
+    /// mask of lanes whose box the ray meets in [0, t_max]. The same arithmetic
+    /// as [`Aabb::intersect_ray`], lane by lane, in loops without branches so
+    /// that they compile to SIMD, and the mask through `wide` (a movemask: LLVM
+    /// turns the plain loop into a tangle of shuffles).
+    #[inline(always)]
+    pub(super) fn test(&self, node: &WideNode, t_max: f32) -> ([f32; WIDTH], u32) {
+        let b = &node.bounds;
+        let (o, inv) = (self.origin, self.inv_dir);
+        let mut t_near = [0.0f32; WIDTH];
+        let mut t_far = [0.0f32; WIDTH];
+        for lane in 0..WIDTH {
+            let near_x = (b[self.near[0]][lane] - o[0]) * inv[0];
+            let near_y = (b[self.near[1]][lane] - o[1]) * inv[1];
+            let near_z = (b[self.near[2]][lane] - o[2]) * inv[2];
+            let far_x = (b[self.far[0]][lane] - o[0]) * inv[0];
+            let far_y = (b[self.far[1]][lane] - o[1]) * inv[1];
+            let far_z = (b[self.far[2]][lane] - o[2]) * inv[2];
+            t_near[lane] = 0.0f32.max(near_x).max(near_y).max(near_z);
+            t_far[lane] = t_max.min(far_x).min(far_y).min(far_z) * BOX_MARGIN;
+        }
+        let hit = f32x8::from(t_near).simd_le(f32x8::from(t_far));
+        (t_near, hit.to_bitmask())
+    }
+}
+
+/// The lanes of `node` holding leaves.
+#[inline(always)]
+pub(super) fn leaf_lanes(node: &WideNode) -> u32 {
+    !u32x8::from(node.count).simd_eq(u32x8::ZERO).to_bitmask() & ((1 << WIDTH) - 1)
+}
+
+/// Appends the wide node for binary node `b` (and its subtree) at `depth`; returns its
+/// index and the deepest level in its subtree. Allocates nothing but the nodes it appends.
+pub(super) fn collapse_node(
+    bvh: &Bvh,
+    b: usize,
+    depth: u32,
+    out: &mut Vec<WideNode>,
+) -> (u32, u32) {
+    let me = out.len();
+    out.push(WideNode::UNUSED);
+    // The children so far, in order, and the surface area of each interior one (None
+    // for a leaf), computed once per child rather than at every opening.
+    let mut kids = [0usize; WIDTH];
+    let mut areas: [Option<f32>; WIDTH] = [None; WIDTH];
+    let area = |k: usize| {
+        let node = &bvh.nodes[k];
+        (!node.is_leaf()).then(|| node.bounds().surface_area())
+    };
+    let first = &bvh.nodes[b];
+    let mut n = if first.is_leaf() {
+        kids[0] = b;
+        1
+    } else {
+        for (i, k) in [b + 1, first.offset as usize].into_iter().enumerate() {
+            (kids[i], areas[i]) = (k, area(k));
+        }
+        2
+    };
+    // Open the interior child of largest area until `WIDTH` children are reached; of
+    // equal areas the last, as `Iterator::max_by` picked before (the same tree).
+    while n < WIDTH {
+        let mut open: Option<(usize, f32)> = None;
+        for (k, a) in areas[..n].iter().enumerate() {
+            if let Some(a) = *a
+                && open.is_none_or(|(_, best)| a.total_cmp(&best).is_ge())
+            {
+                open = Some((k, a));
+            }
+        }
+        let Some((k, _)) = open else {
+            break;
+        };
+        let node = kids[k];
+        kids.copy_within(k + 1..n, k + 2);
+        areas.copy_within(k + 1..n, k + 2);
+        (kids[k], areas[k]) = (node + 1, area(node + 1));
+        let right = bvh.nodes[node].offset as usize;
+        (kids[k + 1], areas[k + 1]) = (right, area(right));
+        n += 1;
+    }
+    let mut deepest = depth;
+    for (lane, &k) in kids[..n].iter().enumerate() {
+        let node = bvh.nodes[k];
+        out[me].set_child_bounds(lane, node.bounds());
+        if node.is_leaf() {
+            out[me].child[lane] = node.offset;
+            out[me].count[lane] = node.count;
+        } else {
+            let (child, d) = collapse_node(bvh, k, depth + 1, out);
+            out[me].child[lane] = child;
+            deepest = deepest.max(d);
+        }
+    }
+    (me as u32, deepest)
+}

@@ -1,0 +1,207 @@
+//! The wide BVH's queries: closest hit and any hit, each compiled once per
+//! instruction set (runtime dispatch through `multiversion`) with the traversal of
+//! [`super::wide`] and the leaf test of [`super::leaf`] inlined into every clone.
+//!
+//! The leaf test reaches the traversal as a [`LeafVisitor`] whose method is
+//! `#[inline(always)]`, not as a closure: rustc compiles a closure as a function of
+//! its own, which LLVM did not inline into the clones, so the SoA prefilter ran as
+//! baseline SSE2 code behind a call per leaf.
+
+use multiversion::multiversion;
+
+use super::leaf::{RayLeaf, groups_for, lane_mask};
+use super::triangle::{RayShear, TriangleHit, intersect_triangle_sheared};
+use super::{Ray, WideBvh};
+
+/// What a query does at each leaf the traversal reaches.
+pub(super) trait LeafVisitor {
+    /// Tests the leaf at group `group` with `count` triangles; may lower `t_max` (the
+    /// traversal's cull distance); returns true to stop the traversal.
+    fn leaf(&mut self, group: usize, count: usize, t_max: &mut f32) -> bool;
+}
+
+/// The per-ray constants of the leaf test.
+struct RayLeaves<'a> {
+    wide: &'a WideBvh,
+    ray: &'a Ray,
+    shear: RayShear,
+    pre: RayLeaf,
+}
+
+impl RayLeaves<'_> {
+    /// Tests the triangles of the leaf at `group` with `count` triangles: the SoA
+    /// prefilter, then the exact test's answer on each lane it keeps (from the lane's
+    /// values where they decide it), both against `*bound`;
+    /// `hit(prim, hit, bound)` may lower the bound and returns true to stop.
+    /// `DECIDE`: take a lane's hit from the prefilter's values where they decide it
+    /// (what pays for closest hits; any-hit queries mostly stop at their first hit).
+    #[inline(always)]
+    fn hits<const DECIDE: bool>(
+        &self,
+        group: usize,
+        count: usize,
+        bound: &mut f32,
+        mut hit: impl FnMut(u32, &TriangleHit, &mut f32) -> bool,
+    ) -> bool {
+        let (wide, ray) = (self.wide, self.ray);
+        for i in 0..groups_for(count) {
+            let g = &wide.leaves.groups[group + i];
+            // The bound only falls within the group, so the group's first bound lets
+            // through every lane a later, lower one accepts.
+            let candidates = self.pre.candidates(g, *bound);
+            let mut lanes = candidates.mask & lane_mask(i, count);
+            while lanes != 0 {
+                let lane = lanes.trailing_zeros() as usize;
+                lanes &= lanes - 1;
+                let tri = g.triangle(lane);
+                let h = if DECIDE {
+                    candidates.hit(lane, tri, &self.shear, ray.origin, *bound)
+                } else {
+                    let [a, b, c] = tri;
+                    intersect_triangle_sheared(&self.shear, ray.origin, a, b, c, *bound)
+                };
+                let Some(h) = h else {
+                    continue;
+                };
+                let p = wide.prims[wide.leaves.first[group + i] as usize + lane];
+                if hit(p, &h, bound) {
+                    return true;
+                }
+            }
+        }
+        false
+    }
+}
+
+/// The closest-hit query's leaf test and best hit so far.
+struct ClosestLeaves<'a> {
+    leaves: RayLeaves<'a>,
+    best: Option<(u32, TriangleHit)>,
+    /// The query's own t_max.
+    limit: f32,
+    /// Past the best t so far by more than the rounding of the triangle test's scaled
+    /// early-out (t_scaled against bound * det, three roundings): then every triangle
+    /// with t at or below the best passes it whatever the order of the leaves, and the
+    /// comparison below alone decides, so the hit is the least (t, index) of the
+    /// triangles hit before `limit`. It changes only with the best hit.
+    bound: f32,
+}
+
+impl LeafVisitor for ClosestLeaves<'_> {
+    #[inline(always)]
+    fn leaf(&mut self, group: usize, count: usize, t_max: &mut f32) -> bool {
+        let (best, limit) = (&mut self.best, self.limit);
+        self.leaves
+            .hits::<true>(group, count, &mut self.bound, |p, h, bound| {
+                if best.is_none_or(|(bp, bh)| h.t < bh.t || (h.t == bh.t && p < bp)) {
+                    *t_max = h.t;
+                    *bound = h.t.next_up().next_up().next_up().min(limit);
+                    *best = Some((p, *h));
+                }
+                false
+            })
+    }
+}
+
+/// The any-hit query's leaf test and the caller's visitor.
+struct AnyLeaves<'a, F> {
+    leaves: RayLeaves<'a>,
+    bound: f32,
+    visit: F,
+}
+
+impl<F: FnMut(u32, &TriangleHit) -> bool> LeafVisitor for AnyLeaves<'_, F> {
+    #[inline(always)]
+    fn leaf(&mut self, group: usize, count: usize, _: &mut f32) -> bool {
+        let visit = &mut self.visit;
+        self.leaves
+            .hits::<false>(group, count, &mut self.bound, |p, h, _| visit(p, h))
+    }
+}
+
+impl WideBvh {
+    /// The closest hit in (0, t_max): the caller's triangle index and the hit. Of
+    /// triangles hit at exactly the same t (where two meet), the lowest index wins,
+    /// whatever order the traversal meets them in.
+    pub fn closest_hit(&self, ray: &Ray, t_max: f32) -> Option<(u32, TriangleHit)> {
+        closest_hit_dispatched(self, ray, t_max)
+    }
+
+    /// [`Self::closest_hit`] compiled for whatever target features the caller has.
+    #[inline(always)]
+    pub(super) fn closest_hit_inlined(&self, ray: &Ray, t_max: f32) -> Option<(u32, TriangleHit)> {
+        let mut leaves = ClosestLeaves {
+            leaves: RayLeaves::new(self, ray),
+            best: None,
+            limit: t_max,
+            bound: t_max,
+        };
+        let mut cull = t_max;
+        self.traverse::<true>(ray, &mut cull, &mut leaves);
+        leaves.best
+    }
+
+    /// Visits triangles the ray meets in (0, t_max), in no particular order, until
+    /// `visit(prim, hit)` returns true (stop); returns whether it stopped.
+    pub fn any_hit(
+        &self,
+        ray: &Ray,
+        t_max: f32,
+        visit: impl FnMut(u32, &TriangleHit) -> bool,
+    ) -> bool {
+        any_hit_dispatched(self, ray, t_max, visit)
+    }
+
+    /// [`Self::any_hit`] compiled for whatever target features the caller has.
+    #[inline(always)]
+    pub(super) fn any_hit_inlined(
+        &self,
+        ray: &Ray,
+        t_max: f32,
+        visit: impl FnMut(u32, &TriangleHit) -> bool,
+    ) -> bool {
+        let mut leaves = AnyLeaves {
+            leaves: RayLeaves::new(self, ray),
+            bound: t_max,
+            visit,
+        };
+        let mut cull = t_max;
+        self.traverse::<false>(ray, &mut cull, &mut leaves)
+    }
+}
+
+impl<'a> RayLeaves<'a> {
+    #[inline(always)]
+    fn new(wide: &'a WideBvh, ray: &'a Ray) -> RayLeaves<'a> {
+        let shear = RayShear::new(ray);
+        let pre = RayLeaf::new(ray, &shear);
+        RayLeaves {
+            wide,
+            ray,
+            shear,
+            pre,
+        }
+    }
+}
+
+// Runtime dispatch: one clone of each query per instruction set, the traversal and
+// triangle tests (`#[inline(always)]`) compiled inside each, picked once per process
+// from the CPU's features; no `-C target-cpu` needed. Rust never contracts a * b + c
+// into an FMA by itself, so every clone computes bit-identical results.
+
+/// [`WideBvh::closest_hit`] for the best instruction set the CPU has.
+#[multiversion(targets("x86_64+avx2+fma", "x86_64+sse4.2"))]
+fn closest_hit_dispatched(wide: &WideBvh, ray: &Ray, t_max: f32) -> Option<(u32, TriangleHit)> {
+    wide.closest_hit_inlined(ray, t_max)
+}
+
+/// [`WideBvh::any_hit`] for the best instruction set the CPU has.
+#[multiversion(targets("x86_64+avx2+fma", "x86_64+sse4.2"))]
+fn any_hit_dispatched<F: FnMut(u32, &TriangleHit) -> bool>(
+    wide: &WideBvh,
+    ray: &Ray,
+    t_max: f32,
+    visit: F,
+) -> bool {
+    wide.any_hit_inlined(ray, t_max, visit)
+}
