@@ -64,8 +64,9 @@ impl Lights {
         let n = shadow_samples.max(1);
         let inv = 1.0 / n as f32;
         for s in &self.segments {
+            let slot = point.slot((depth, path, light), n);
             for k in 0..n {
-                let u = point.light1((depth, path, light), k, n);
+                let u = slot.light1(k);
                 let (position, color) = sample_segment_light(s, u);
                 f(LightSample {
                     position,
@@ -76,8 +77,9 @@ impl Lights {
             light += 1;
         }
         for q in &self.parallelograms {
+            let slot = point.slot((depth, path, light), n);
             for k in 0..n {
-                let uv = point.light2((depth, path, light), k, n);
+                let uv = slot.light2(k);
                 let (position, color) = sample_parallelogram_light(q, uv);
                 f(LightSample {
                     position,
