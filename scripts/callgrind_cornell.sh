@@ -11,6 +11,8 @@
 # direct (default): the render bench's settings (Lambertian, no reflection or
 # transparency rays, 4 shadow samples, uniform pixel samples); scene: the
 # scene file's own settings (Phong, mirror reflections, stratified samples).
+# With CALLGRIND_KEEP=FILE, the 16-spp run's callgrind output is copied to FILE
+# (for callgrind_annotate's split by function).
 set -euo pipefail
 root="$(cd "$(dirname "$0")/.." && pwd)"
 size="${1:-96}"
@@ -42,6 +44,7 @@ count() {
 }
 extra=("$@")
 read -r ir16 rays16 summary16 < <(count 16)
+if [[ -n "${CALLGRIND_KEEP:-}" ]]; then cp "$tmp/cg.out" "$CALLGRIND_KEEP"; fi
 read -r ir1 rays1 _ < <(count 1)
 echo "glint, 16 spp: $summary16"
 echo "16 spp: $ir16 instructions, $rays16 rays, $(( ir16 / rays16 )) per ray (whole process)"

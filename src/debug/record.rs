@@ -50,7 +50,7 @@ pub fn record_light_samples(mut log: ResMut<TraceLog>, mut trace: ResMut<DebugTr
 
 /// Records what each shadow ray of the current depth let through.
 pub fn record_shadow_results(wf: Res<Wavefront>, mut trace: ResMut<DebugTrace>) {
-    trace.record_shadow_results(&wf.shadow_arrived);
+    trace.record_shadow_results(&wf.shadow_rays.arrived());
 }
 
 /// Records the radiance each ray of the current depth gathered.

@@ -185,6 +185,23 @@ impl PointSampler {
         }
     }
 
+    /// The `n` samples of light slot `slot`: for the low-discrepancy kinds their shared
+    /// scramble seed is hashed here, once, instead of once per sample.
+    #[inline]
+    pub fn slot(&self, slot: LightSlot, n: u32) -> SlotSampler {
+        let (base, seed) = match self.kind {
+            SamplerKind::Independent => (0, 0),
+            _ => self.light_point(slot, 0, n),
+        };
+        SlotSampler {
+            point: *self,
+            slot,
+            n,
+            base,
+            seed,
+        }
+    }
+
     /// [`Sampler::get1`] of this pixel and sample.
     fn get1(&self, dim: u32) -> f32 {
         unit_from_hash(mix64(self.prefix ^ u64::from(dim)))
@@ -203,6 +220,39 @@ impl PointSampler {
                 (index.wrapping_mul(n).wrapping_add(k), seed)
             }
             _ => (k, seed),
+        }
+    }
+}
+
+/// The samples of one light slot of one shading point ([`PointSampler::slot`]): the
+/// same numbers as [`PointSampler::light1`] and [`PointSampler::light2`].
+#[derive(Clone, Copy, Debug)]
+pub struct SlotSampler {
+    point: PointSampler,
+    slot: LightSlot,
+    n: u32,
+    /// Sobol' index of sample 0 (low-discrepancy kinds); sample k is `base + k`.
+    base: u32,
+    /// The slot's scramble seed (low-discrepancy kinds).
+    seed: u32,
+}
+
+impl SlotSampler {
+    /// Sample `k` of the slot, 1D.
+    #[inline]
+    pub fn light1(&self, k: u32) -> f32 {
+        match self.point.kind {
+            SamplerKind::Independent => self.point.light1(self.slot, k, self.n),
+            _ => sobol_1d(self.base.wrapping_add(k), self.seed),
+        }
+    }
+
+    /// Sample `k` of the slot, 2D.
+    #[inline]
+    pub fn light2(&self, k: u32) -> Vec2 {
+        match self.point.kind {
+            SamplerKind::Independent => self.point.light2(self.slot, k, self.n),
+            _ => Vec2::from(sobol_2d(self.base.wrapping_add(k), self.seed)),
         }
     }
 }
@@ -400,6 +450,9 @@ mod tests {
                         }
                     };
                     assert_eq!(point.light1(slot, k, n).to_bits(), u.to_bits(), "{kind:?}");
+                    let slotted = point.slot(slot, n);
+                    assert_eq!(slotted.light1(k).to_bits(), u.to_bits(), "{kind:?}");
+                    assert_eq!(slotted.light2(k), uv, "{kind:?}");
                     assert_eq!(point.light2(slot, k, n), uv, "{kind:?}");
                     assert_eq!(s.light2(pixel, sample, slot, k, n), uv, "{kind:?}");
                 }

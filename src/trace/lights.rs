@@ -1,9 +1,9 @@
 //! The light table and light sampling for direct illumination.
 
 use bevy_ecs::prelude::*;
-use glam::Vec3;
+use glam::{Vec2, Vec3};
 
-use crate::sampling::{Sampler, sample_parallelogram_light, sample_segment_light};
+use crate::sampling::{Sampler, SlotSampler, sample_parallelogram_light, sample_segment_light};
 use crate::scene::{ParallelogramLight, PointLight, SegmentLight};
 use crate::stats::{RenderStats, Stage};
 
@@ -52,42 +52,46 @@ impl Lights {
     ) {
         let (pixel, sample, depth, path) = key;
         let point = sampler.at(pixel, sample);
-        let mut light = 0u32;
-        for p in &self.points {
-            f(LightSample {
-                position: p.position,
-                color: p.color,
-                light,
-            });
-            light += 1;
-        }
         let n = shadow_samples.max(1);
         let inv = 1.0 / n as f32;
-        for s in &self.segments {
-            for k in 0..n {
-                let u = point.light1((depth, path, light), k, n);
-                let (position, color) = sample_segment_light(s, u);
+        let (points, segments) = (self.points.len(), self.segments.len());
+        // One loop over every light and one call of `f`, so that `f` (the shading of a
+        // sample) is inlined; with a call per light kind it stayed a call per sample.
+        for light in 0..self.len() {
+            // Point lights take no sample numbers: no slot seed is hashed for them.
+            let slot = (light >= points).then(|| point.slot((depth, path, light as u32), n));
+            let count = if light < points { 1 } else { n };
+            for k in 0..count {
+                let (position, color) = if light < points {
+                    let p = &self.points[light];
+                    (p.position, p.color)
+                } else if light < points + segments {
+                    let (position, color) =
+                        sample_segment_light(&self.segments[light - points], unit1(slot, k));
+                    (position, color * inv)
+                } else {
+                    let q = &self.parallelograms[light - points - segments];
+                    let (position, color) = sample_parallelogram_light(q, unit2(slot, k));
+                    (position, color * inv)
+                };
                 f(LightSample {
                     position,
-                    color: color * inv,
-                    light,
+                    color,
+                    light: light as u32,
                 });
             }
-            light += 1;
-        }
-        for q in &self.parallelograms {
-            for k in 0..n {
-                let uv = point.light2((depth, path, light), k, n);
-                let (position, color) = sample_parallelogram_light(q, uv);
-                f(LightSample {
-                    position,
-                    color: color * inv,
-                    light,
-                });
-            }
-            light += 1;
         }
     }
+}
+
+/// Sample `k` of an area light's slot, 1D (every area light has a slot).
+fn unit1(slot: Option<SlotSampler>, k: u32) -> f32 {
+    slot.map_or(0.0, |s| s.light1(k))
+}
+
+/// Sample `k` of an area light's slot, 2D.
+fn unit2(slot: Option<SlotSampler>, k: u32) -> Vec2 {
+    slot.map_or(Vec2::ZERO, |s| s.light2(k))
 }
 
 /// Gathers every light entity into the [`Lights`] table.
@@ -104,4 +108,69 @@ pub fn gather_lights(
         parallelograms: parallelograms.iter().copied().collect(),
     };
     stats.record(Stage::GatherLights, lights.len() as u64);
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::scene::SamplerKind;
+
+    #[test]
+    fn every_light_gives_its_samples_in_order() {
+        let segment = SegmentLight {
+            endpoint0: Vec3::ZERO,
+            endpoint1: Vec3::X,
+            color0: Vec3::ONE,
+            color1: Vec3::splat(3.0),
+        };
+        let parallelogram = ParallelogramLight {
+            v0: Vec3::Y,
+            edge01: Vec3::X,
+            edge02: Vec3::Z,
+            color0: Vec3::ONE,
+            color1: Vec3::X,
+            color2: Vec3::Y,
+            color3: Vec3::Z,
+        };
+        let point = PointLight {
+            position: Vec3::splat(2.0),
+            color: Vec3::splat(0.5),
+        };
+        let lights = Lights {
+            points: vec![point],
+            segments: vec![segment],
+            parallelograms: vec![parallelogram],
+        };
+        for kind in [SamplerKind::Independent, SamplerKind::Stratified] {
+            let sampler = Sampler::with_kind(3, kind);
+            let mut seen = Vec::new();
+            lights.for_each_sample(&sampler, (7, 2, 1, 0), 3, |s| seen.push(s));
+            let at = sampler.at(7, 2);
+            let mut expected = vec![LightSample {
+                position: point.position,
+                color: point.color,
+                light: 0,
+            }];
+            for k in 0..3 {
+                let (position, color) = sample_segment_light(&segment, at.light1((1, 0, 1), k, 3));
+                let light = 1;
+                expected.push(LightSample {
+                    position,
+                    color: color * (1.0 / 3.0),
+                    light,
+                });
+            }
+            for k in 0..3 {
+                let uv = at.light2((1, 0, 2), k, 3);
+                let (position, color) = sample_parallelogram_light(&parallelogram, uv);
+                let light = 2;
+                expected.push(LightSample {
+                    position,
+                    color: color * (1.0 / 3.0),
+                    light,
+                });
+            }
+            assert_eq!(seen, expected, "{kind:?}");
+        }
+    }
 }

@@ -8,5 +8,6 @@ pub mod lights;
 pub mod log;
 pub mod materials;
 pub mod plan;
+pub mod shadow;
 pub mod surface;
 pub mod wavefront;

@@ -15,6 +15,7 @@ use super::lights::{LightSample, Lights};
 use super::log::{HitObserver, LightObserver, RayTrace, TraceLog};
 use super::materials::Materials;
 use super::plan::RenderPlan;
+pub use super::shadow::{CHUNK, ShadowQueue, ShadowRay};
 use super::surface::{SHADOW_EPSILON, Surface, offset_ray_origin, surface_at};
 use crate::accel::Ray;
 use crate::sampling::{Sampler, pixel_mode, pixel_sample_offset, samples_taken};
@@ -22,9 +23,6 @@ use crate::scene::{Camera, PixelSampling, Settings};
 use crate::shade::{Shading, ShadingInput};
 use crate::stats::{RenderStats, Stage};
 use crate::trace::geometry::SceneGeometry;
-
-/// Rays per rayon task: large enough to amortise scheduling, small enough to balance.
-const CHUNK: usize = 1024;
 
 /// A ray waiting to be traced, with where its radiance goes.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -99,17 +97,6 @@ impl RayKind {
     }
 }
 
-/// A shadow ray: `contribution` reaches ray `owner`'s radiance if the path is clear.
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub struct ShadowRay {
-    /// From the shading point to the light sample; traced over `(0, 1 - SHADOW_EPSILON)`.
-    pub ray: Ray,
-    /// Unoccluded contribution, already weighted.
-    pub contribution: Vec3,
-    /// Index of the queued ray whose hit cast it.
-    pub owner: u32,
-}
-
 /// What a pass covers: one sample index over a range of pixels.
 #[derive(Resource, Clone, Copy, Debug, Default, PartialEq, Eq)]
 pub struct PassRegion {
@@ -132,14 +119,9 @@ pub struct Wavefront {
     pub hits: Vec<Option<Surface>>,
     /// Radiance gathered by each ray at this depth (direct light, background).
     pub ray_radiance: Vec<Vec3>,
-    /// Shadow rays cast this depth.
-    pub shadow_rays: Vec<ShadowRay>,
-    /// Each shading chunk's shadow rays before they join `shadow_rays`: kept between
-    /// depths and regions, because freeing them returned their pages to the kernel and
-    /// every region faulted them in anew (a tenth of the render's time in the kernel).
-    pub shadow_chunks: Vec<Vec<ShadowRay>>,
-    /// What each shadow ray let through: its contribution times visibility (or tint).
-    pub shadow_arrived: Vec<Vec3>,
+    /// Shadow rays cast this depth, held by the shading chunks that cast them, and
+    /// after tracing what each let through: its contribution times visibility (or tint).
+    pub shadow_rays: ShadowQueue,
     /// Rays for the next depth.
     pub next: Vec<QueuedRay>,
 }
@@ -382,25 +364,19 @@ fn shade_ray(
 }
 
 /// Shades rays and hits chunk by chunk, in parallel, into `radiance` (each ray's) and
-/// `shadow_rays`, both in queue order; returns what `O` observed. Both buffers are the
-/// last depth's, refilled so that their allocations are reused. Chunks, not rays, own
-/// the shadow-ray vectors (`chunk_shadows`, reused too): no allocation per ray, and
-/// joining them in chunk order keeps the queue deterministic.
+/// `shadow_rays`, both in queue order; returns what `O` observed. Both are the last
+/// depth's buffers, refilled so that their allocations are reused. Chunks, not rays, own
+/// the shadow-ray vectors: no allocation per ray, and a deterministic queue.
 fn shade_chunks<O: LightObserver>(
     cx: &ShadeContext,
     rays: &[QueuedRay],
     hits: &[Option<Surface>],
     radiance: &mut Vec<Vec3>,
-    chunk_shadows: &mut Vec<Vec<ShadowRay>>,
-    shadow_rays: &mut Vec<ShadowRay>,
+    shadow_rays: &mut ShadowQueue,
 ) -> O {
     radiance.clear();
     radiance.resize(rays.len(), Vec3::ZERO);
-    let chunks = rays.len().div_ceil(CHUNK);
-    if chunk_shadows.len() < chunks {
-        chunk_shadows.resize_with(chunks, Vec::new);
-    }
-    let chunk_shadows = &mut chunk_shadows[..chunks];
+    let chunk_shadows = shadow_rays.start(rays.len().div_ceil(CHUNK));
     let observers: Vec<O> = rays
         .par_chunks(CHUNK)
         .zip(hits.par_chunks(CHUNK))
@@ -408,7 +384,6 @@ fn shade_chunks<O: LightObserver>(
         .zip(chunk_shadows.par_iter_mut())
         .enumerate()
         .map(|(c, (((rays, hits), out), shadows))| {
-            shadows.clear();
             let mut observer = O::default();
             for (k, ((q, hit), r)) in rays.iter().zip(hits).zip(out).enumerate() {
                 let i = c * CHUNK + k;
@@ -419,11 +394,12 @@ fn shade_chunks<O: LightObserver>(
             observer
         })
         .collect();
-    shadow_rays.clear();
+    // Only the observers are joined (nothing for `()`): the shadow rays stay in chunks.
     let mut observed = O::default();
+    let mut before = 0;
     for (s, o) in chunk_shadows.iter().zip(observers) {
-        observed.join(o, shadow_rays.len() as u32);
-        shadow_rays.extend_from_slice(s);
+        observed.join(o, before as u32);
+        before += s.len();
     }
     observed
 }
@@ -460,15 +436,11 @@ pub fn shade_hits(
     };
     let wf = &mut *wf;
     let (rays, hits) = (&wf.rays, &wf.hits);
-    let (radiance, chunks, shadows) = (
-        &mut wf.ray_radiance,
-        &mut wf.shadow_chunks,
-        &mut wf.shadow_rays,
-    );
+    let (radiance, shadows) = (&mut wf.ray_radiance, &mut wf.shadow_rays);
     match log {
-        None => shade_chunks::<()>(&cx, rays, hits, radiance, chunks, shadows),
+        None => shade_chunks::<()>(&cx, rays, hits, radiance, shadows),
         Some(mut log) => {
-            log.light_samples = shade_chunks(&cx, rays, hits, radiance, chunks, shadows);
+            log.light_samples = shade_chunks(&cx, rays, hits, radiance, shadows);
         }
     }
     stats.record(
@@ -489,25 +461,18 @@ pub fn trace_shadow_rays(
     let t_max = 1.0 - SHADOW_EPSILON;
     let transparent = plan.transparent_shadows;
     let wf = &mut *wf;
-    // Into the buffer of the last depth: its allocation is reused, not made anew.
-    wf.shadow_rays
-        .par_iter()
-        .with_min_len(CHUNK)
-        .map(|s| {
-            if transparent {
-                s.contribution * geometry.transmittance(&s.ray, t_max, &materials, &mut ())
-            } else if geometry.occluded(&s.ray, t_max, &mut ()) {
-                Vec3::ZERO
-            } else {
-                s.contribution
-            }
-        })
-        .collect_into_vec(&mut wf.shadow_arrived);
-    for (s, c) in wf.shadow_rays.iter().zip(&wf.shadow_arrived) {
-        wf.ray_radiance[s.owner as usize] += *c;
-    }
-    stats.record(Stage::TraceShadowRays, wf.shadow_rays.len() as u64);
-    stats.rays.shadow += wf.shadow_rays.len() as u64;
+    wf.shadow_rays.trace(&mut wf.ray_radiance, |s| {
+        if transparent {
+            s.contribution * geometry.transmittance(&s.ray, t_max, &materials, &mut ())
+        } else if geometry.occluded(&s.ray, t_max, &mut ()) {
+            Vec3::ZERO
+        } else {
+            s.contribution
+        }
+    });
+    let n = wf.shadow_rays.len() as u64;
+    stats.record(Stage::TraceShadowRays, n);
+    stats.rays.shadow += n;
 }
 
 /// Adds each ray's radiance into its camera sample, in queue order (deterministic).

@@ -8,7 +8,7 @@ use glint::trace::lights::Lights;
 use glint::trace::materials::{MaterialData, Materials};
 use glint::trace::plan::RenderPlan;
 use glint::trace::wavefront::{
-    PassRegion, SampleRadiance, ShadowRay, Wavefront, advance_depth, gather_radiance,
+    PassRegion, SampleRadiance, ShadowQueue, ShadowRay, Wavefront, advance_depth, gather_radiance,
     intersect_rays, shade_hits, spawn_pass_through_rays, spawn_reflection_rays, trace_shadow_rays,
 };
 
@@ -102,7 +102,7 @@ fn shade_hits_queues_the_closed_form_radiance_as_a_shadow_ray() {
     let wf = world.resource::<Wavefront>();
     assert_eq!(wf.ray_radiance, [Vec3::ZERO], "it waits for its shadow ray");
     assert_eq!(wf.shadow_rays.len(), 1);
-    let s = wf.shadow_rays[0];
+    let s = wf.shadow_rays.to_vec()[0];
     assert_eq!(s.owner, 0);
     assert_close(s.contribution, phong_closed_form());
     assert_close(s.ray.origin, Vec3::Z);
@@ -127,7 +127,7 @@ fn shade_hits_reuses_its_shadow_buffers_without_keeping_old_rays() {
     let wf = world.resource::<Wavefront>();
     assert!(wf.shadow_rays.is_empty());
     assert!(
-        wf.shadow_chunks[0].capacity() >= 1,
+        wf.shadow_rays.chunk_capacity(0) >= 1,
         "the chunk's buffer is kept for the next depth"
     );
 }
@@ -169,7 +169,7 @@ fn shadow_world(transparent: bool, alpha: f32) -> bevy_ecs::world::World {
     };
     let wf = Wavefront {
         ray_radiance: vec![Vec3::splat(0.5); 2],
-        shadow_rays: vec![shadow(0.0, 0), shadow(3.0, 1)],
+        shadow_rays: ShadowQueue::from_rays(&[shadow(0.0, 0), shadow(3.0, 1)]),
         ..Wavefront::default()
     };
     let plan = RenderPlan {
