@@ -93,26 +93,27 @@ impl LeafTris {
     /// Groups the leaves of `nodes`, whose leaf lanes hold `(first slot, count)` into
     /// `prims`, and points those lanes at their groups instead.
     pub fn build(nodes: &mut [WideNode], prims: &[u32], positions: &[[Vec3; 3]]) -> LeafTris {
-        let mut leaves: Vec<(usize, usize)> = Vec::new();
+        // (first slot, node, lane) of every leaf lane, the slot first so that the sort
+        // compares keys in hand instead of reading the nodes again.
+        let mut leaves: Vec<(u32, u32, u8)> = Vec::new();
+        let mut groups = 0;
         for (i, node) in nodes.iter().enumerate() {
             for lane in 0..node.count.len() {
                 if node.count[lane] > 0 {
-                    leaves.push((i, lane));
+                    leaves.push((node.child[lane], i as u32, lane as u8));
+                    groups += groups_for(node.count[lane] as usize);
                 }
             }
         }
         // Groups in slot order, as the triangles were: neighbouring leaves stay close.
-        leaves.sort_unstable_by_key(|&(i, lane)| nodes[i].child[lane]);
-        let groups: usize = leaves
-            .iter()
-            .map(|&(i, lane)| groups_for(nodes[i].count[lane] as usize))
-            .sum();
+        leaves.sort_unstable();
         let mut out = LeafTris {
             groups: Vec::with_capacity(groups),
             first: Vec::with_capacity(groups),
         };
-        for (i, lane) in leaves {
-            let (slot, count) = (nodes[i].child[lane] as usize, nodes[i].count[lane]);
+        for (slot, i, lane) in leaves {
+            let (slot, i, lane) = (slot as usize, i as usize, lane as usize);
+            let count = nodes[i].count[lane];
             (nodes[i].child[lane], nodes[i].count[lane]) = leaf_lane(out.groups.len(), count);
             for start in (slot..slot + count as usize).step_by(LANES) {
                 let mut group = TriGroup::PADDING;
