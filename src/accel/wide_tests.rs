@@ -412,12 +412,7 @@ fn reference_collapse(bvh: &Bvh, b: usize, out: &mut Vec<WideNode>) -> u32 {
         kids.insert(k + 1, bvh.nodes[open].offset as usize);
     }
     for (lane, &k) in kids.iter().enumerate() {
-        let node = bvh.nodes[k];
-        out[me].set_child_bounds(lane, node.bounds());
-        if node.is_leaf() {
-            out[me].child[lane] = node.offset;
-            out[me].count[lane] = node.count;
-        } else {
+        if !out[me].set_lane(lane, &bvh.nodes[k]) {
             out[me].child[lane] = reference_collapse(bvh, k, out);
         }
     }
