@@ -6,7 +6,10 @@
 //! rounds; then build times and glint's bytes per triangle.
 //!
 //! glint is the 8-wide BVH the render traverses; `glint-binary` is the binary
-//! tree it is collapsed from. Peers: `obvhs` (CWBVH, always); tinybvh's
+//! tree it is collapsed from; `glint-2level`, on a model whose meshes are drawn
+//! several times (MetalRoughSpheresNoTextures), is what the render traverses there:
+//! the 8-wide BVH of the meshes drawn once and the two-level BVH of the instances
+//! (every other row traces all instances flattened into copies). Peers: `obvhs` (CWBVH, always); tinybvh's
 //! BVH8_CPU (`Intersect`, `IsOccluded`; AVX2 + FMA) when build.rs could
 //! compile it, see `glint_bench::tinybvh`; Embree 4 when `GLINT_EMBREE_LIB`
 //! names its library (see `glint_bench::embree`). Every peer calls its
@@ -21,12 +24,12 @@ use std::hint::black_box;
 use std::time::{Duration, Instant};
 
 use glam::{Vec3, Vec3A};
-use glint::accel::{Aabb, Bvh, Ray, SplitMethod, WideBvh};
+use glint::accel::{Aabb, Bvh, Ray, SplitMethod, TwoLevelBvh, WideBvh};
 use glint_bench::embree::{Embree, EmbreeScene};
 use glint_bench::tinybvh::TinyBvh8;
 use glint_bench::{
     View, assets_dir, displaced_torus, find_file, glint_closest, glint_occluded, incoherent_rays,
-    load_model, primary_rays, shadow_rays,
+    load_instanced, primary_rays, shadow_rays,
 };
 use obvhs::BvhBuildParams;
 use obvhs::cwbvh::{CwBvh, builder::build_cwbvh_from_tris};
@@ -51,6 +54,9 @@ enum Peer<'a> {
     Glint(&'a WideBvh),
     /// The binary BVH it is collapsed from (what the render traversed before).
     GlintBinary(&'a Bvh, &'a [[Vec3; 3]]),
+    /// The 8-wide BVH over the meshes drawn once and the two-level BVH over the
+    /// instances of the others, each ray traced through both.
+    GlintInstanced(&'a WideBvh, &'a TwoLevelBvh),
     Obvhs(&'a CwBvh, &'a [Triangle]),
     Embree(&'a EmbreeScene<'a>),
     TinyBvh(&'a TinyBvh8),
@@ -61,6 +67,7 @@ impl Peer<'_> {
         match self {
             Peer::Glint(..) => "glint",
             Peer::GlintBinary(..) => "glint-binary",
+            Peer::GlintInstanced(..) => "glint-2level",
             Peer::Obvhs(..) => "obvhs",
             Peer::Embree(..) => "embree",
             Peer::TinyBvh(..) => "tinybvh8",
@@ -82,6 +89,17 @@ impl Peer<'_> {
                 shadow,
                 |r| glint_occluded(bvh, tris, r),
                 |r| glint_closest(bvh, tris, r).is_some(),
+            ),
+            Peer::GlintInstanced(once, two) => count_hits(
+                rays,
+                shadow,
+                |r| once.any_hit(r, 1.0, |_, _| true) || two.any_hit(r, 1.0, |_, _, _| true),
+                |r| {
+                    let t = once
+                        .closest_hit(r, f32::INFINITY)
+                        .map_or(f32::INFINITY, |h| h.1.t);
+                    t < f32::INFINITY || two.closest_hit(r, t).is_some()
+                },
             ),
             Peer::Obvhs(cw, tris) => {
                 let ray = |r: &Ray, t_max| {
@@ -144,8 +162,16 @@ fn time_ms(rounds: usize, mut f: impl FnMut()) -> (f64, f64, f64) {
     (m, v[0], v[v.len() - 1])
 }
 
-/// `embree`: a one-thread device and one with Embree's default threads.
-fn bench_mesh(label: &str, tris: &[[Vec3; 3]], view: &View, embree: Option<(&Embree, &Embree)>) {
+/// `embree`: a one-thread device and one with Embree's default threads; `two_level`:
+/// how many of `tris` the render keeps flattened (the first ones) and its two-level
+/// BVH over the rest, if some meshes are instanced.
+fn bench_mesh(
+    label: &str,
+    tris: &[[Vec3; 3]],
+    view: &View,
+    embree: Option<(&Embree, &Embree)>,
+    two_level: Option<(usize, &TwoLevelBvh)>,
+) {
     let rounds = env_usize("GLINT_BENCH_ROUNDS", 7).max(1);
     let n_rays = env_usize("GLINT_BENCH_RAYS", 1 << 18);
     let side = (n_rays as f64).sqrt() as usize;
@@ -261,11 +287,26 @@ fn bench_mesh(label: &str, tris: &[[Vec3; 3]], view: &View, embree: Option<(&Emb
         );
     }
     println!("{peer_memory}");
+    let once = two_level.map(|(n, _)| {
+        let b: Vec<Aabb> = bounds[..n].to_vec();
+        WideBvh::collapse(&Bvh::build(&b, SplitMethod::SahBinned), &tris[..n])
+    });
+    if let (Some(once), Some((n, two))) = (&once, two_level) {
+        println!(
+            "  glint-2level {:.1} per triangle drawn ({n} triangles drawn once, 8-wide; {} meshes in {} instances, two-level)",
+            per_tri(once.bytes() + two.bytes()),
+            two.meshes.len(),
+            two.instances.len(),
+        );
+    }
     let mut peers = vec![
         Peer::Glint(&wide),
         Peer::GlintBinary(&bvh, tris),
         Peer::Obvhs(&cw, &otris),
     ];
+    if let (Some(once), Some((_, two))) = (&once, two_level) {
+        peers.push(Peer::GlintInstanced(once, two));
+    }
     if let Ok(t) = &tiny {
         peers.push(Peer::TinyBvh(t));
     }
@@ -323,10 +364,22 @@ fn main() {
     };
     let embree = embree.as_ref().map(|(e1, en)| (e1, en));
     if wanted("torus100k") {
-        bench_mesh("torus100k", &displaced_torus(158), &View::torus(), embree);
+        bench_mesh(
+            "torus100k",
+            &displaced_torus(158),
+            &View::torus(),
+            embree,
+            None,
+        );
     }
     if wanted("torus1M") {
-        bench_mesh("torus1M", &displaced_torus(500), &View::torus(), embree);
+        bench_mesh(
+            "torus1M",
+            &displaced_torus(500),
+            &View::torus(),
+            embree,
+            None,
+        );
     }
     let Some(assets) = assets_dir() else {
         println!("skipping the real models: ../shared/assets is absent");
@@ -335,13 +388,21 @@ fn main() {
     let models = [
         ("bunny", "classic/stanford-bunny", "obj"),
         ("sponza", "classic/sponza-dabrovic", "obj"),
+        (
+            "mrspheres",
+            "khronos-gltf/MetalRoughSpheresNoTextures/glTF-Binary",
+            "glb",
+        ),
     ];
     for (label, dir, ext) in models {
         if !wanted(label) {
             continue;
         }
-        match find_file(&assets.join(dir), ext).and_then(|p| load_model(&p)) {
-            Ok(tris) if !tris.is_empty() => bench_mesh(label, &tris, &View::framing(&tris), embree),
+        match find_file(&assets.join(dir), ext).and_then(|p| load_instanced(&p)) {
+            Ok((tris, once, two)) if !tris.is_empty() => {
+                let two = (!two.is_empty()).then_some((once, &two));
+                bench_mesh(label, &tris, &View::framing(&tris), embree, two)
+            }
             Ok(_) => println!("skipping {label}: no triangles"),
             Err(e) => println!("skipping {label}: {e}"),
         }

@@ -6,7 +6,7 @@
 use std::path::{Path, PathBuf};
 
 use glam::{Vec3, vec3};
-use glint::accel::{Bvh, Ray, RayShear, intersect_triangle_sheared};
+use glint::accel::{Bvh, Ray, RayShear, TwoLevelBvh, intersect_triangle_sheared};
 use glint::test_util::Lcg;
 
 pub mod embree;
@@ -210,15 +210,33 @@ pub fn find_file(dir: &Path, ext: &str) -> Result<PathBuf, String> {
 }
 
 /// World-space triangles exactly as glint renders them: the model imported
-/// by glint's own importer, flattened by its Prepare schedule.
+/// by glint's own importer, prepared by its Prepare schedule, every instance of
+/// a shared mesh flattened into its own copy.
 pub fn load_model(path: &Path) -> Result<Vec<[Vec3; 3]>, String> {
+    load_instanced(path).map(|(tris, ..)| tris)
+}
+
+/// [`load_model`]'s triangles, of which the render keeps the first `.1` (the meshes
+/// drawn once) flattened, and the two-level BVH it keeps the rest in (the meshes drawn
+/// more than once; empty when there is none), from one import.
+pub fn load_instanced(path: &Path) -> Result<(Vec<[Vec3; 3]>, usize, TwoLevelBvh), String> {
     let renderer = glint::Renderer::from_file(path, &Default::default())
         .and_then(|mut r| r.prepare().map(|()| r))
         .map_err(|e| e.to_string())?;
     let geometry = renderer
         .world
         .resource::<glint::trace::geometry::SceneGeometry>();
-    Ok(geometry.all_positions())
+    let mut tris = geometry.all_positions();
+    let flattened = tris.len();
+    let two = geometry.instanced.clone();
+    for instance in &two.instances {
+        let mesh = &two.meshes[instance.mesh as usize];
+        let m = &instance.world_from_object;
+        tris.extend(
+            (0..mesh.prims.len() as u32).map(|p| mesh.triangle(p).map(|v| m.transform_point3(v))),
+        );
+    }
+    Ok((tris, flattened, two))
 }
 
 /// `../shared/assets` next to the checkout, if present.
