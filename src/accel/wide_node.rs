@@ -109,7 +109,12 @@ impl RayBoxes {
             let far_y = (b[self.far[1]][lane] - o[1]) * inv[1];
             let far_z = (b[self.far[2]][lane] - o[2]) * inv[2];
             t_near[lane] = 0.0f32.max(near_x).max(near_y).max(near_z);
-            t_far[lane] = t_max.min(far_x).min(far_y).min(far_z) * BOX_MARGIN;
+            // From infinity, which is not NaN: then each f32::min is one minps whose
+            // second operand is known not NaN, where from t_max (which LLVM cannot
+            // prove is not NaN) each needs a NaN check and a blend. The minimum of the
+            // same four values, NaN ignored, in another order: the same value.
+            let far = f32::INFINITY.min(far_x).min(far_y).min(far_z);
+            t_far[lane] = far.min(t_max) * BOX_MARGIN;
         }
         let hit = f32x8::from(t_near).simd_le(f32x8::from(t_far));
         (t_near, hit.to_bitmask())
