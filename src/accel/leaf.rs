@@ -12,6 +12,7 @@
 //! scalar test's, bit for bit, by construction.
 
 use glam::Vec3;
+use wide::u32x4;
 
 use super::Ray;
 use super::triangle::{RayShear, TriangleHit, intersect_triangle_sheared, is_degenerate};
@@ -212,6 +213,9 @@ impl RayLeaf {
             t_scaled: [0.0; LANES],
             sizes: [[0.0; LANES]; 3],
         };
+        // All bits set in a lane that passes, so that the masks are one movmskps each
+        // (a lane's bit shifted into place became shuffles, ors and extracts; LANES is
+        // 4, one u32x4).
         let mut bits = [0u32; LANES];
         let mut zeros = [0u32; LANES];
         for lane in 0..LANES {
@@ -232,15 +236,15 @@ impl RayLeaf {
                 (t_scaled <= 0.0) | (t_scaled >= bound)
             };
             let keep = zero | !(mixed | (det == 0.0) | outside);
-            bits[lane] = (keep as u32) << lane;
-            zeros[lane] = (zero as u32) << lane;
+            bits[lane] = (keep as u32).wrapping_neg();
+            zeros[lane] = (zero as u32).wrapping_neg();
             [out.e[0][lane], out.e[1][lane], out.e[2][lane]] = [u, v, w];
             out.det[lane] = det;
             out.t_scaled[lane] = t_scaled;
             [out.sizes[0][lane], out.sizes[1][lane], out.sizes[2][lane]] = sheared.sizes();
         }
-        out.mask = bits.iter().fold(0, |mask, &bit| mask | bit);
-        out.zero = zeros.iter().fold(0, |mask, &bit| mask | bit);
+        out.mask = u32x4::from(bits).to_bitmask();
+        out.zero = u32x4::from(zeros).to_bitmask();
         out
     }
 
