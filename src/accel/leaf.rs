@@ -205,14 +205,13 @@ impl RayLeaf {
     /// Rust never fuses a product and a sum. No branches, so the loop vectorises.
     #[inline(always)]
     pub fn candidates(&self, g: &TriGroup, t_max: f32) -> Candidates {
-        let mut out = Candidates {
-            mask: 0,
-            zero: 0,
-            e: [[0.0; LANES]; 3],
-            det: [0.0; LANES],
-            t_scaled: [0.0; LANES],
-            sizes: [[0.0; LANES]; 3],
-        };
+        // Local arrays, every lane written, gathered at the end: LLVM then drops their
+        // zero initialisation, which it kept (six stores per group) in a struct
+        // written field by field.
+        let mut e = [[0.0; LANES]; 3];
+        let mut dets = [0.0; LANES];
+        let mut t_scaleds = [0.0; LANES];
+        let mut sizes = [[0.0; LANES]; 3];
         // All bits set in a lane that passes, so that the masks are one movmskps each
         // (a lane's bit shifted into place became shuffles, ors and extracts; LANES is
         // 4, one u32x4).
@@ -238,14 +237,19 @@ impl RayLeaf {
             let keep = zero | !(mixed | (det == 0.0) | outside);
             bits[lane] = (keep as u32).wrapping_neg();
             zeros[lane] = (zero as u32).wrapping_neg();
-            [out.e[0][lane], out.e[1][lane], out.e[2][lane]] = [u, v, w];
-            out.det[lane] = det;
-            out.t_scaled[lane] = t_scaled;
-            [out.sizes[0][lane], out.sizes[1][lane], out.sizes[2][lane]] = sheared.sizes();
+            [e[0][lane], e[1][lane], e[2][lane]] = [u, v, w];
+            dets[lane] = det;
+            t_scaleds[lane] = t_scaled;
+            [sizes[0][lane], sizes[1][lane], sizes[2][lane]] = sheared.sizes();
         }
-        out.mask = u32x4::from(bits).to_bitmask();
-        out.zero = u32x4::from(zeros).to_bitmask();
-        out
+        Candidates {
+            mask: u32x4::from(bits).to_bitmask(),
+            zero: u32x4::from(zeros).to_bitmask(),
+            e,
+            det: dets,
+            t_scaled: t_scaleds,
+            sizes,
+        }
     }
 
     /// Lane `lane` of `g` in ray space, as [`intersect_triangle_sheared`] computes it.
