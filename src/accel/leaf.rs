@@ -188,7 +188,7 @@ impl RayLeaf {
     /// The prefilter's constants for `ray` sheared by `s` (`RayShear::new(ray)`).
     #[inline(always)]
     pub fn new(ray: &Ray, s: &RayShear) -> RayLeaf {
-        let o = ray.origin;
+        let o = ray.origin.to_array();
         RayLeaf {
             axes: [s.kx, s.ky, s.kz],
             origin: [o[s.kx], o[s.ky], o[s.kz]],
