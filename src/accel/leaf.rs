@@ -12,6 +12,7 @@
 //! scalar test's, bit for bit, by construction.
 
 use glam::Vec3;
+use wide::u32x4;
 
 use super::Ray;
 use super::triangle::{RayShear, TriangleHit, intersect_triangle_sheared, is_degenerate};
@@ -187,7 +188,7 @@ impl RayLeaf {
     /// The prefilter's constants for `ray` sheared by `s` (`RayShear::new(ray)`).
     #[inline(always)]
     pub fn new(ray: &Ray, s: &RayShear) -> RayLeaf {
-        let o = ray.origin;
+        let o = ray.origin.to_array();
         RayLeaf {
             axes: [s.kx, s.ky, s.kz],
             origin: [o[s.kx], o[s.ky], o[s.kz]],
@@ -204,14 +205,16 @@ impl RayLeaf {
     /// Rust never fuses a product and a sum. No branches, so the loop vectorises.
     #[inline(always)]
     pub fn candidates(&self, g: &TriGroup, t_max: f32) -> Candidates {
-        let mut out = Candidates {
-            mask: 0,
-            zero: 0,
-            e: [[0.0; LANES]; 3],
-            det: [0.0; LANES],
-            t_scaled: [0.0; LANES],
-            sizes: [[0.0; LANES]; 3],
-        };
+        // Local arrays, every lane written, gathered at the end: LLVM then drops their
+        // zero initialisation, which it kept (six stores per group) in a struct
+        // written field by field.
+        let mut e = [[0.0; LANES]; 3];
+        let mut dets = [0.0; LANES];
+        let mut t_scaleds = [0.0; LANES];
+        let mut sizes = [[0.0; LANES]; 3];
+        // All bits set in a lane that passes, so that the masks are one movmskps each
+        // (a lane's bit shifted into place became shuffles, ors and extracts; LANES is
+        // 4, one u32x4).
         let mut bits = [0u32; LANES];
         let mut zeros = [0u32; LANES];
         for lane in 0..LANES {
@@ -232,16 +235,21 @@ impl RayLeaf {
                 (t_scaled <= 0.0) | (t_scaled >= bound)
             };
             let keep = zero | !(mixed | (det == 0.0) | outside);
-            bits[lane] = (keep as u32) << lane;
-            zeros[lane] = (zero as u32) << lane;
-            [out.e[0][lane], out.e[1][lane], out.e[2][lane]] = [u, v, w];
-            out.det[lane] = det;
-            out.t_scaled[lane] = t_scaled;
-            [out.sizes[0][lane], out.sizes[1][lane], out.sizes[2][lane]] = sheared.sizes();
+            bits[lane] = (keep as u32).wrapping_neg();
+            zeros[lane] = (zero as u32).wrapping_neg();
+            [e[0][lane], e[1][lane], e[2][lane]] = [u, v, w];
+            dets[lane] = det;
+            t_scaleds[lane] = t_scaled;
+            [sizes[0][lane], sizes[1][lane], sizes[2][lane]] = sheared.sizes();
         }
-        out.mask = bits.iter().fold(0, |mask, &bit| mask | bit);
-        out.zero = zeros.iter().fold(0, |mask, &bit| mask | bit);
-        out
+        Candidates {
+            mask: u32x4::from(bits).to_bitmask(),
+            zero: u32x4::from(zeros).to_bitmask(),
+            e,
+            det: dets,
+            t_scaled: t_scaleds,
+            sizes,
+        }
     }
 
     /// Lane `lane` of `g` in ray space, as [`intersect_triangle_sheared`] computes it.

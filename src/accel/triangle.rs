@@ -59,16 +59,18 @@ impl RayShear {
         let mut ky = (kx + 1) % 3;
         // Swapping keeps the winding (sign of the edge functions) consistent
         // with the original orientation when looking down -z.
-        if ray.dir[kz] < 0.0 {
+        // An array indexes without glam's per-component `match` (a chain of branches).
+        let d = ray.dir.to_array();
+        if d[kz] < 0.0 {
             std::mem::swap(&mut kx, &mut ky);
         }
-        let dz = ray.dir[kz];
+        let dz = d[kz];
         RayShear {
             kx,
             ky,
             kz,
-            sx: ray.dir[kx] / dz,
-            sy: ray.dir[ky] / dz,
+            sx: d[kx] / dz,
+            sy: d[ky] / dz,
             sz: 1.0 / dz,
             dir: ray.dir,
         }

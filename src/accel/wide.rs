@@ -124,12 +124,10 @@ impl WideBvh {
         t_max: &mut f32,
         visitor: &mut impl LeafVisitor,
     ) -> bool {
-        if self.nodes.is_empty()
-            || self
-                .bounds
-                .intersect_ray(ray.origin, ray.dir.recip(), *t_max)
-                .is_none()
-        {
+        // No test of the root's own box: the root's test of its children's boxes culls
+        // the same rays (a box inside another is met only by rays that meet that one),
+        // and most rays meet it anyway.
+        if self.nodes.is_empty() {
             return false;
         }
         let mut stack = Stack::new();

@@ -3,7 +3,7 @@
 //! children ([`RayBoxes`]), and the collapse of the binary tree into such nodes.
 
 use glam::Vec3;
-use wide::{f32x8, u32x8};
+use wide::u32x8;
 
 use super::bvh::{Bvh, BvhNode};
 use super::{Aabb, BOX_MARGIN, Ray};
@@ -94,13 +94,13 @@ impl RayBoxes {
     /// mask of lanes whose box the ray meets in [0, t_max]. The same arithmetic
     /// as [`Aabb::intersect_ray`], lane by lane, in loops without branches so
     /// that they compile to SIMD, and the mask through `wide` (a movemask: LLVM
-    /// turns the plain loop into a tangle of shuffles).
+    /// turns a plain loop of shifted bits into a tangle of shuffles).
     #[inline(always)]
     pub(super) fn test(&self, node: &WideNode, t_max: f32) -> ([f32; WIDTH], u32) {
         let b = &node.bounds;
         let (o, inv) = (self.origin, self.inv_dir);
         let mut t_near = [0.0f32; WIDTH];
-        let mut t_far = [0.0f32; WIDTH];
+        let mut hit = [0u32; WIDTH];
         for lane in 0..WIDTH {
             let near_x = (b[self.near[0]][lane] - o[0]) * inv[0];
             let near_y = (b[self.near[1]][lane] - o[1]) * inv[1];
@@ -109,10 +109,19 @@ impl RayBoxes {
             let far_y = (b[self.far[1]][lane] - o[1]) * inv[1];
             let far_z = (b[self.far[2]][lane] - o[2]) * inv[2];
             t_near[lane] = 0.0f32.max(near_x).max(near_y).max(near_z);
-            t_far[lane] = t_max.min(far_x).min(far_y).min(far_z) * BOX_MARGIN;
+            // From infinity, which is not NaN: then each f32::min is one minps whose
+            // second operand is known not NaN, where from t_max (which LLVM cannot
+            // prove is not NaN) each needs a NaN check and a blend. The minimum of the
+            // same four values, NaN ignored, in another order: the same value.
+            let far = f32::INFINITY.min(far_x).min(far_y).min(far_z);
+            let t_far = far.min(t_max) * BOX_MARGIN;
+            // All bits set where the ray meets the box: the mask is one movmskps of
+            // the compare, where wide's f32x8 compare (two f32x4 halves in the
+            // dispatched clones, which lack the AVX cfg) split the register and
+            // joined it again.
+            hit[lane] = ((t_near[lane] <= t_far) as u32).wrapping_neg();
         }
-        let hit = f32x8::from(t_near).simd_le(f32x8::from(t_far));
-        (t_near, hit.to_bitmask())
+        (t_near, u32x8::from(hit).to_bitmask())
     }
 }
 
