@@ -3,7 +3,8 @@
 //! builds over the anchors bench's torus of about `n` triangles (default 100000) `rounds` times
 //! (default 5) on `threads` threads (default 1) and prints the median and range of the
 //! build time, the tree's SAH cost and a hash of the tree (which changes when the tree
-//! does), then the median and range of its collapse to the 8-wide BVH on the same threads;
+//! does), then the median and range of its collapse to the 8-wide BVH on the same threads,
+//! then of both together run on a worker and from the main thread (as the anchors bench);
 //! each with the median of the process's minor page faults per round (Linux; fresh pages
 //! the allocator had to map, which cost about as much as the work on a loaded VM).
 
@@ -22,13 +23,16 @@ fn main() {
     let (n, rounds, threads) = (arg(1, 100_000), arg(2, 5), arg(3, 1));
     let tris = displaced_torus(((n / 4) as f64).sqrt().max(1.0) as usize);
     let bounds: Vec<Aabb> = tris.iter().map(|t| Aabb::from_points(t)).collect();
-    let pool = rayon::ThreadPoolBuilder::new()
+    rayon::ThreadPoolBuilder::new()
         .num_threads(threads)
-        .build()
+        .build_global()
         .expect("a thread pool");
+    // Runs `f` on a worker of the pool (from the main thread it would run there, with
+    // the main thread's allocator arena).
+    let in_pool = |f: &mut (dyn FnMut() + Send)| rayon::scope(|_| f());
     let mut bvh = Bvh::default();
     let (ms, faults) = time_rounds(rounds, || {
-        bvh = pool.install(|| Bvh::build(&bounds, SplitMethod::SahBinned));
+        in_pool(&mut || bvh = Bvh::build(&bounds, SplitMethod::SahBinned));
     });
     println!(
         "{} triangles, {threads} threads: build {ms}, {faults} page faults, {} nodes, {} leaves, SAH cost {:.3} ({:.3} counting leaves in groups of {LANES}), hash {:016x}",
@@ -41,12 +45,20 @@ fn main() {
     );
     let mut wide = WideBvh::default();
     let (ms, faults) = time_rounds(rounds, || {
-        wide = pool.install(|| WideBvh::collapse(&bvh, &tris));
+        in_pool(&mut || wide = WideBvh::collapse(&bvh, &tris));
     });
     println!(
         "collapse {ms}, {faults} page faults, {} wide nodes, {:.1} bytes/tri",
         wide.nodes.len(),
         wide.bytes() as f64 / tris.len() as f64
+    );
+    // Both steps as the anchors bench times them (each round's trees dropped in it), on
+    // a worker and then from the main thread, as its one-thread and all-threads rows do.
+    let pipeline = || WideBvh::collapse(&Bvh::build(&bounds, SplitMethod::SahBinned), &tris);
+    let (worker, worker_faults) = time_rounds(rounds, || in_pool(&mut || drop(pipeline())));
+    let (main, main_faults) = time_rounds(rounds, || drop(pipeline()));
+    println!(
+        "build + collapse: on a worker {worker}, {worker_faults} page faults; from the main thread {main}, {main_faults} page faults"
     );
 }
 
