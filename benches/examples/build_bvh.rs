@@ -3,7 +3,10 @@
 //! builds over the anchors bench's torus of about `n` triangles (default 100000) `rounds` times
 //! (default 5) on `threads` threads (default 1) and prints the median and range of the
 //! build time, the tree's SAH cost and a hash of the tree (which changes when the tree
-//! does), then the median and range of its collapse to the 8-wide BVH on the same threads.
+//! does), then the median and range of its collapse to the 8-wide BVH on the same threads,
+//! then of both together run on a worker and from the main thread (as the anchors bench);
+//! each with the median of the process's minor page faults per round (Linux; fresh pages
+//! the allocator had to map, which cost about as much as the work on a loaded VM).
 
 use std::time::Instant;
 
@@ -20,45 +23,42 @@ fn main() {
     let (n, rounds, threads) = (arg(1, 100_000), arg(2, 5), arg(3, 1));
     let tris = displaced_torus(((n / 4) as f64).sqrt().max(1.0) as usize);
     let bounds: Vec<Aabb> = tris.iter().map(|t| Aabb::from_points(t)).collect();
-    let pool = rayon::ThreadPoolBuilder::new()
+    rayon::ThreadPoolBuilder::new()
         .num_threads(threads)
-        .build()
+        .build_global()
         .expect("a thread pool");
-    let mut ms = Vec::new();
+    // Runs `f` on a worker of the pool (from the main thread it would run there, with
+    // the main thread's allocator arena).
+    let in_pool = |f: &mut (dyn FnMut() + Send)| rayon::scope(|_| f());
     let mut bvh = Bvh::default();
-    for _ in 0..rounds {
-        let start = Instant::now();
-        bvh = pool.install(|| Bvh::build(&bounds, SplitMethod::SahBinned));
-        ms.push(start.elapsed().as_secs_f64() * 1e3);
-    }
-    ms.sort_by(f64::total_cmp);
+    let (ms, faults) = time_rounds(rounds, || {
+        in_pool(&mut || bvh = Bvh::build(&bounds, SplitMethod::SahBinned));
+    });
     println!(
-        "{} triangles, {threads} threads: build {:.1} ms median [{:.1}-{:.1}], {} nodes, {} leaves, SAH cost {:.3} ({:.3} counting leaves in groups of {LANES}), hash {:016x}",
+        "{} triangles, {threads} threads: build {ms}, {faults} page faults, {} nodes, {} leaves, SAH cost {:.3} ({:.3} counting leaves in groups of {LANES}), hash {:016x}",
         tris.len(),
-        ms[ms.len() / 2],
-        ms[0],
-        ms[ms.len() - 1],
         bvh.nodes.len(),
         bvh.leaf_count(),
         bvh.sah_cost(),
         group_sah_cost(&bvh),
         bvh.tree_hash()
     );
-    let mut ms = Vec::new();
     let mut wide = WideBvh::default();
-    for _ in 0..rounds {
-        let start = Instant::now();
-        wide = pool.install(|| WideBvh::collapse(&bvh, &tris));
-        ms.push(start.elapsed().as_secs_f64() * 1e3);
-    }
-    ms.sort_by(f64::total_cmp);
+    let (ms, faults) = time_rounds(rounds, || {
+        in_pool(&mut || wide = WideBvh::collapse(&bvh, &tris));
+    });
     println!(
-        "collapse {:.1} ms median [{:.1}-{:.1}], {} wide nodes, {:.1} bytes/tri",
-        ms[ms.len() / 2],
-        ms[0],
-        ms[ms.len() - 1],
+        "collapse {ms}, {faults} page faults, {} wide nodes, {:.1} bytes/tri",
         wide.nodes.len(),
         wide.bytes() as f64 / tris.len() as f64
+    );
+    // Both steps as the anchors bench times them (each round's trees dropped in it), on
+    // a worker and then from the main thread, as its one-thread and all-threads rows do.
+    let pipeline = || WideBvh::collapse(&Bvh::build(&bounds, SplitMethod::SahBinned), &tris);
+    let (worker, worker_faults) = time_rounds(rounds, || in_pool(&mut || drop(pipeline())));
+    let (main, main_faults) = time_rounds(rounds, || drop(pipeline()));
+    println!(
+        "build + collapse: on a worker {worker}, {worker_faults} page faults; from the main thread {main}, {main_faults} page faults"
     );
 }
 
@@ -72,4 +72,39 @@ fn group_sah_cost(bvh: &Bvh) -> f64 {
         .map(|n| area(n) * n.count.div_ceil(LANES as u32).max(1) as f64)
         .sum();
     cost / bvh.nodes.first().map_or(1.0, area)
+}
+
+/// Runs `f` `rounds` times; the median and range of its time, and the median of the
+/// minor page faults each round took.
+fn time_rounds(rounds: usize, mut f: impl FnMut()) -> (String, u64) {
+    let (mut ms, mut faults) = (Vec::new(), Vec::new());
+    for _ in 0..rounds.max(1) {
+        let before = minor_faults();
+        let start = Instant::now();
+        f();
+        ms.push(start.elapsed().as_secs_f64() * 1e3);
+        faults.push(minor_faults() - before);
+    }
+    ms.sort_by(f64::total_cmp);
+    faults.sort_unstable();
+    let time = format!(
+        "{:.1} ms median [{:.1}-{:.1}]",
+        ms[ms.len() / 2],
+        ms[0],
+        ms[ms.len() - 1]
+    );
+    (time, faults[faults.len() / 2])
+}
+
+/// The process's minor page faults so far (field 10 of `/proc/self/stat`); 0 where
+/// there is no such file.
+fn minor_faults() -> u64 {
+    let stat = std::fs::read_to_string("/proc/self/stat").unwrap_or_default();
+    // The command name (field 2) may hold spaces; the fields after it do not.
+    let after_name = stat.rsplit_once(')').map_or("", |(_, rest)| rest);
+    after_name
+        .split_whitespace()
+        .nth(7)
+        .and_then(|f| f.parse().ok())
+        .unwrap_or(0)
 }

@@ -16,7 +16,6 @@ use wide::u32x4;
 
 use super::Ray;
 use super::triangle::{RayShear, TriangleHit, intersect_triangle_sheared, is_degenerate};
-use super::wide::WideNode;
 
 /// Triangles per group. Four beat eight on the 100k torus: the binned-SAH leaves
 /// hold 3.3 triangles on average (at most 4 there), so eight lanes would mostly pad.
@@ -91,41 +90,35 @@ pub fn lane_mask(i: usize, count: usize) -> u32 {
 }
 
 impl LeafTris {
-    /// Groups the leaves of `nodes`, whose leaf lanes hold `(first slot, count)` into
-    /// `prims`, and points those lanes at their groups instead.
-    pub fn build(nodes: &mut [WideNode], prims: &[u32], positions: &[[Vec3; 3]]) -> LeafTris {
-        // (first slot, node, lane) of every leaf lane, the slot first so that the sort
-        // compares keys in hand instead of reading the nodes again.
-        let mut leaves: Vec<(u32, u32, u8)> = Vec::new();
-        let mut groups = 0;
-        for (i, node) in nodes.iter().enumerate() {
-            for lane in 0..node.count.len() {
-                if node.count[lane] > 0 {
-                    leaves.push((node.child[lane], i as u32, lane as u8));
-                    groups += groups_for(node.count[lane] as usize);
-                }
-            }
-        }
-        // Groups in slot order, as the triangles were: neighbouring leaves stay close.
-        leaves.sort_unstable();
-        let mut out = LeafTris {
+    /// Room for `groups` groups.
+    pub fn with_capacity(groups: usize) -> LeafTris {
+        LeafTris {
             groups: Vec::with_capacity(groups),
             first: Vec::with_capacity(groups),
-        };
-        for (slot, i, lane) in leaves {
-            let (slot, i, lane) = (slot as usize, i as usize, lane as usize);
-            let count = nodes[i].count[lane];
-            (nodes[i].child[lane], nodes[i].count[lane]) = leaf_lane(out.groups.len(), count);
-            for start in (slot..slot + count as usize).step_by(LANES) {
-                let mut group = TriGroup::PADDING;
-                for k in start..(start + LANES).min(slot + count as usize) {
-                    group.set_triangle(k - start, positions[prims[k] as usize]);
-                }
-                out.groups.push(group);
-                out.first.push(start as u32);
-            }
         }
-        out
+    }
+
+    /// Appends the groups of the leaf of `count` triangles at slot `slot` of `prims`;
+    /// returns the wide node's `(child, count)` for it ([`leaf_lane`]). Leaves pushed in
+    /// slot order keep the groups in the triangles' order: neighbouring leaves stay close.
+    pub fn push_leaf(
+        &mut self,
+        slot: u32,
+        count: u32,
+        prims: &[u32],
+        positions: &[[Vec3; 3]],
+    ) -> (u32, u32) {
+        let lane = leaf_lane(self.groups.len(), count);
+        let (slot, end) = (slot as usize, (slot + count) as usize);
+        for start in (slot..end).step_by(LANES) {
+            let mut group = TriGroup::PADDING;
+            for k in start..(start + LANES).min(end) {
+                group.set_triangle(k - start, positions[prims[k] as usize]);
+            }
+            self.groups.push(group);
+            self.first.push(start as u32);
+        }
+        lane
     }
 
     /// Bytes held.

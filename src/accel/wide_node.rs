@@ -132,12 +132,15 @@ pub(super) fn leaf_lanes(node: &WideNode) -> u32 {
 }
 
 /// Appends the wide node for binary node `b` (and its subtree) at `depth`; returns its
-/// index and the deepest level in its subtree. Allocates nothing but the nodes it appends.
+/// index and the deepest level in its subtree. Each binary leaf's `(offset, count)`
+/// becomes the lane's `(child, count)` through `leaf`, called in the leaves' depth-first
+/// order, which is their slot order. Allocates nothing but the nodes it appends.
 pub(super) fn collapse_node(
     bvh: &Bvh,
     b: usize,
     depth: u32,
     out: &mut Vec<WideNode>,
+    leaf: &mut impl FnMut(u32, u32) -> (u32, u32),
 ) -> (u32, u32) {
     let me = out.len();
     out.push(WideNode::UNUSED);
@@ -183,8 +186,11 @@ pub(super) fn collapse_node(
     }
     let mut deepest = depth;
     for (lane, &k) in kids[..n].iter().enumerate() {
-        if !out[me].set_lane(lane, &bvh.nodes[k]) {
-            let (child, d) = collapse_node(bvh, k, depth + 1, out);
+        let node = &bvh.nodes[k];
+        if out[me].set_lane(lane, node) {
+            (out[me].child[lane], out[me].count[lane]) = leaf(node.offset, node.count);
+        } else {
+            let (child, d) = collapse_node(bvh, k, depth + 1, out, leaf);
             out[me].child[lane] = child;
             deepest = deepest.max(d);
         }

@@ -431,7 +431,7 @@ fn the_collapse_opens_the_same_children_as_the_reference() {
         let bounds: Vec<Aabb> = tris.iter().map(|t| Aabb::from_points(t)).collect();
         let bvh = Bvh::build(&bounds, split);
         let (mut got, mut expect) = (Vec::new(), Vec::new());
-        super::collapse_node(&bvh, 0, 0, &mut got);
+        super::collapse_node(&bvh, 0, 0, &mut got, &mut |slot, count| (slot, count));
         reference_collapse(&bvh, 0, &mut expect);
         assert_eq!(got, expect);
     }
@@ -467,7 +467,54 @@ fn the_collapse_opens_the_same_children_as_the_reference() {
         }
     }
     let (mut got, mut expect) = (Vec::new(), Vec::new());
-    super::collapse_node(&bvh, 0, 0, &mut got);
+    super::collapse_node(&bvh, 0, 0, &mut got, &mut |slot, count| (slot, count));
     reference_collapse(&bvh, 0, &mut expect);
     assert_eq!(got, expect);
+}
+
+/// The leaf groups as `LeafTris::build` made them before the collapse grouped leaves as
+/// it met them: every leaf lane of the collapsed nodes (holding binary slots), sorted by
+/// slot, then grouped.
+fn reference_leaves(bvh: &Bvh, tris: &[Tri]) -> (Vec<WideNode>, LeafTris) {
+    let mut nodes = Vec::new();
+    super::collapse_node(bvh, 0, 0, &mut nodes, &mut |slot, count| (slot, count));
+    let mut lanes = Vec::new();
+    for (i, node) in nodes.iter().enumerate() {
+        for lane in 0..WIDTH {
+            if node.count[lane] > 0 {
+                lanes.push((node.child[lane], i, lane));
+            }
+        }
+    }
+    lanes.sort_unstable();
+    let mut leaves = LeafTris::default();
+    for (slot, i, lane) in lanes {
+        let count = nodes[i].count[lane];
+        (nodes[i].child[lane], nodes[i].count[lane]) =
+            leaves.push_leaf(slot, count, &bvh.prim_indices, tris);
+    }
+    (nodes, leaves)
+}
+
+#[test]
+fn the_collapse_groups_leaves_in_slot_order() {
+    for (tris, split) in [
+        (random_tris(1, 15), SplitMethod::SahBinned),
+        (random_tris(3000, 16), SplitMethod::SahBinned),
+        (random_tris(3000, 17), SplitMethod::Median),
+        (grid(24), SplitMethod::SahBinned),
+    ] {
+        let (bvh, wide) = both(&tris, split);
+        let (nodes, leaves) = reference_leaves(&bvh, &tris);
+        assert_eq!(wide.nodes, nodes);
+        assert_eq!(wide.leaves.first, leaves.first);
+        let bits = |l: &LeafTris| -> Vec<u32> {
+            let v = l
+                .groups
+                .iter()
+                .flat_map(|g| g.v.as_flattened().as_flattened());
+            v.map(|x| x.to_bits()).collect()
+        };
+        assert_eq!(bits(&wide.leaves), bits(&leaves));
+    }
 }
