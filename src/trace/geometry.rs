@@ -9,6 +9,7 @@ use std::sync::Arc;
 use bevy_ecs::prelude::*;
 use glam::{Vec2, Vec3};
 
+use super::crossings::Crossings;
 use super::materials::Materials;
 use super::plan::RenderPlan;
 use crate::accel::leaf::LANES;
@@ -566,41 +567,6 @@ impl SceneGeometry {
             b = b.union(self.sphere_bvh.bounds());
         }
         b
-    }
-}
-
-/// A transparent surface a shadow ray crosses: (t, material, texture coordinate).
-type Crossing = (f32, u32, Vec2);
-
-/// Crossings of one shadow ray: the first few inline, so that the common case (a handful
-/// of glass surfaces) costs no allocation per ray; more spill to the heap.
-#[derive(Default)]
-struct Crossings {
-    inline: [Crossing; 8],
-    len: usize,
-    spill: Vec<Crossing>,
-}
-
-impl Crossings {
-    fn push(&mut self, c: Crossing) {
-        if self.len < self.inline.len() {
-            self.inline[self.len] = c;
-            self.len += 1;
-        } else {
-            self.spill.push(c);
-        }
-    }
-
-    /// All crossings in order of t.
-    fn sorted(&mut self) -> &[Crossing] {
-        let all = if self.spill.is_empty() {
-            &mut self.inline[..self.len]
-        } else {
-            self.spill.extend_from_slice(&self.inline[..self.len]);
-            &mut self.spill[..]
-        };
-        all.sort_unstable_by(|a, b| a.0.total_cmp(&b.0));
-        all
     }
 }
 
