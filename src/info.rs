@@ -4,6 +4,7 @@ use std::fmt::Write;
 
 use bevy_ecs::prelude::*;
 
+use crate::accel::leaf::{LANES, TriGroup};
 use crate::error::Result;
 use crate::render::Renderer;
 use crate::scene::{Material, Mesh, ParallelogramLight, PointLight, SegmentLight, Sphere};
@@ -76,7 +77,9 @@ pub fn describe(renderer: &mut Renderer) -> Result<String> {
     }
     let stored = geometry.triangles_stored();
     if !bvh.nodes.is_empty() && stored > 0 {
-        let bytes = size_of_val(bvh.nodes.as_slice()) + size_of_val(bvh.prim_indices.as_slice());
+        let bytes = size_of_val(bvh.nodes.as_slice())
+            + size_of_val(bvh.prim_indices.as_slice())
+            + size_of_val(geometry.tri_lanes.as_slice());
         let _ = writeln!(
             o,
             "  binary BVH    {bytes} bytes, {:.1} per stored triangle (kept for observers; a render drops it)",
@@ -89,6 +92,21 @@ pub fn describe(renderer: &mut Renderer) -> Result<String> {
             o,
             "  accel memory  {bytes} bytes, {:.1} per stored triangle (nodes, leaf vertices, indices)",
             bytes as f64 / stored as f64
+        );
+    }
+    let wide = &geometry.tri_wide;
+    if !wide.prims.is_empty() {
+        // Per flattened triangle: where the accel memory goes.
+        let per = |bytes: usize| bytes as f64 / wide.prims.len() as f64;
+        let padding = wide.leaves.groups.len() * LANES - wide.prims.len();
+        let _ = writeln!(
+            o,
+            "  wide BVH      per flattened triangle: nodes {:.1}, leaf vertices {:.1} ({:.1} of it NaN padding), leaf starts {:.1}, indices {:.1}",
+            per(size_of_val(wide.nodes.as_slice())),
+            per(size_of_val(wide.leaves.groups.as_slice())),
+            per(padding * size_of::<TriGroup>() / LANES),
+            per(size_of_val(wide.leaves.first.as_slice())),
+            per(size_of_val(wide.prims.as_slice())),
         );
     }
     let sampler = ron::to_string(&renderer.settings().sampler).unwrap_or_default();

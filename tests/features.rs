@@ -352,6 +352,7 @@ fn barycentric_interpolation_of_normals_and_texcoords() {
         kind: PrimKind::Triangle,
         bary: Vec3::new(-1e-7, 0.5, 0.5 + 1e-7),
         instance: None,
+        lane: g.lane(0),
     };
     let ray = Ray {
         origin: Vec3::new(0.5, 0.5, 1.0),

@@ -77,6 +77,25 @@ fn the_bvh_built_by_the_schedule_validates_and_covers_every_triangle() {
 }
 
 #[test]
+fn triangles_named_by_index_lead_to_their_vertices_with_or_without_the_binary_tree() {
+    for observed in [true, false] {
+        let mut r = load(&std::fs::read_to_string("scenes/cornell_box.ron").unwrap());
+        if observed {
+            r.world.insert_resource(BinaryBvhObserver("this test"));
+        }
+        r.prepare().unwrap();
+        let g = r.world.resource::<SceneGeometry>();
+        // Kept only with the binary tree; searched without it.
+        assert_eq!(g.tri_lanes.is_empty(), !observed);
+        let lanes = g.tri_wide.prim_lanes();
+        for p in 0..34u32 {
+            assert_eq!(g.lane(p), lanes[p as usize]);
+            assert_eq!(g.positions(p), g.tri_wide.triangle_at(lanes[p as usize]));
+        }
+    }
+}
+
+#[test]
 fn a_render_keeps_only_the_wide_triangle_bvh() {
     let mut r = load(&std::fs::read_to_string("scenes/cornell_box.ron").unwrap());
     r.render(None, &mut |_| {}).unwrap();

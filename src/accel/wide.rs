@@ -32,9 +32,6 @@ pub struct WideBvh {
     pub leaves: LeafTris,
     /// The caller's index of each triangle slot, in leaf order.
     pub prims: Vec<u32>,
-    /// Where each of the caller's triangles sits in `leaves`: `group * LANES + lane`,
-    /// so that its vertices are read from there instead of from a second copy.
-    pub prim_lanes: Vec<u32>,
     /// Bounds of everything.
     pub bounds: Aabb,
     /// Levels of nodes below the root's (at most the binary tree's depth).
@@ -96,12 +93,10 @@ impl WideBvh {
         })
         .1;
         nodes.shrink_to_fit();
-        let prim_lanes = prim_lanes(&nodes, &leaves, &prims);
         WideBvh {
             nodes,
             leaves,
             prims,
-            prim_lanes,
             bounds: bvh.bounds(),
             depth,
         }
@@ -112,20 +107,37 @@ impl WideBvh {
         size_of_val(self.nodes.as_slice())
             + self.leaves.bytes()
             + size_of_val(self.prims.as_slice())
-            + size_of_val(self.prim_lanes.as_slice())
     }
 
-    /// The vertices of the caller's triangle `prim`, read from its leaf group.
+    /// The vertices of the triangle at `lane` (`group * LANES + lane`, as
+    /// [`WideBvh::closest_hit_at`] reports it), read from its leaf group.
     #[inline]
-    pub fn triangle(&self, prim: u32) -> [Vec3; 3] {
-        let at = self.prim_lanes[prim as usize] as usize;
-        self.leaves.groups[at / LANES].triangle(at % LANES)
+    pub fn triangle_at(&self, lane: u32) -> [Vec3; 3] {
+        let lane = lane as usize;
+        self.leaves.groups[lane / LANES].triangle(lane % LANES)
+    }
+
+    /// Where each of the caller's triangles sits in `leaves` (`group * LANES + lane`):
+    /// computed, not held, as a render reaches a triangle's vertices through its hit.
+    pub fn prim_lanes(&self) -> Vec<u32> {
+        let mut lanes = vec![0; self.prims.len()];
+        for node in &self.nodes {
+            for lane in 0..WIDTH {
+                let (group, count) = (node.child[lane] as usize, node.count[lane] as usize);
+                for i in 0..count {
+                    let slot = self.leaves.first[group] as usize + i;
+                    lanes[self.prims[slot] as usize] = (group * LANES + i) as u32;
+                }
+            }
+        }
+        lanes
     }
 
     /// The vertices of every triangle, in the caller's order.
     pub fn positions(&self) -> Vec<[Vec3; 3]> {
-        (0..self.prim_lanes.len() as u32)
-            .map(|p| self.triangle(p))
+        self.prim_lanes()
+            .into_iter()
+            .map(|lane| self.triangle_at(lane))
             .collect()
     }
 
@@ -255,15 +267,14 @@ impl WideBvh {
     /// `prims` without gaps or overlap, slot `k` holding `positions[prims[k]]` and
     /// padding lanes NaN; every group belongs to a leaf; a child box contains its
     /// node's children's boxes, a leaf box its triangles; `bounds` contains the root's
-    /// children; unused slots have no box; no node lies deeper than `depth`;
-    /// `prim_lanes` leads each triangle to its own vertices.
+    /// children; unused slots have no box; no node lies deeper than `depth`.
     pub fn validate(&self, positions: &[[Vec3; 3]]) -> Result<(), String> {
         let n = positions.len();
         if self.prims.len() != n {
             return Err(format!("{} prims for {n} triangles", self.prims.len()));
         }
         if self.nodes.is_empty() {
-            return if n == 0 && self.prim_lanes.is_empty() {
+            return if n == 0 {
                 Ok(())
             } else {
                 Err(format!("no nodes for {n} triangles"))
@@ -339,41 +350,8 @@ impl WideBvh {
         if let Some(g) = used.iter().position(|u| !u) {
             return Err(format!("triangle group {g} is in no leaf"));
         }
-        if self.prim_lanes.len() != n {
-            return Err(format!(
-                "{} prim lanes for {n} triangles",
-                self.prim_lanes.len()
-            ));
-        }
-        for (p, lane) in self.prim_lanes.iter().enumerate() {
-            let slot = self
-                .leaves
-                .first
-                .get(*lane as usize / LANES)
-                .map(|f| f + lane % LANES as u32);
-            if slot.and_then(|k| self.prims.get(k as usize)) != Some(&(p as u32)) {
-                return Err(format!(
-                    "prim_lanes[{p}] = {lane} is not triangle {p}'s lane"
-                ));
-            }
-        }
         Ok(())
     }
-}
-
-/// `WideBvh::prim_lanes` of the leaves `nodes` point to in `leaves`, whose slots hold `prims`.
-fn prim_lanes(nodes: &[WideNode], leaves: &LeafTris, prims: &[u32]) -> Vec<u32> {
-    let mut lanes = vec![0; prims.len()];
-    for node in nodes {
-        for lane in 0..WIDTH {
-            let (group, count) = (node.child[lane] as usize, node.count[lane] as usize);
-            for i in 0..count {
-                let slot = leaves.first[group] as usize + i;
-                lanes[prims[slot] as usize] = (group * LANES + i) as u32;
-            }
-        }
-    }
-    lanes
 }
 
 #[cfg(test)]

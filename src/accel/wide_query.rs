@@ -9,7 +9,7 @@
 
 use multiversion::multiversion;
 
-use super::leaf::{RayLeaf, groups_for, lane_mask};
+use super::leaf::{LANES, RayLeaf, groups_for, lane_mask};
 use super::triangle::{RayShear, TriangleHit, intersect_triangle_sheared};
 use super::{Ray, WideBvh};
 
@@ -32,7 +32,8 @@ impl RayLeaves<'_> {
     /// Tests the triangles of the leaf at `group` with `count` triangles: the SoA
     /// prefilter, then the exact test's answer on each lane it keeps (from the lane's
     /// values where they decide it), both against `*bound`;
-    /// `hit(prim, hit, bound)` may lower the bound and returns true to stop.
+    /// `hit(prim, lane, hit, bound)` may lower the bound and returns true to stop
+    /// (`lane`: `group * LANES + lane`, where the triangle's vertices are).
     /// `DECIDE`: take a lane's hit from the prefilter's values where they decide it
     /// (what pays for closest hits; any-hit queries mostly stop at their first hit).
     #[inline(always)]
@@ -41,7 +42,7 @@ impl RayLeaves<'_> {
         group: usize,
         count: usize,
         bound: &mut f32,
-        mut hit: impl FnMut(u32, &TriangleHit, &mut f32) -> bool,
+        mut hit: impl FnMut(u32, u32, &TriangleHit, &mut f32) -> bool,
     ) -> bool {
         let (wide, ray) = (self.wide, self.ray);
         for i in 0..groups_for(count) {
@@ -64,7 +65,7 @@ impl RayLeaves<'_> {
                     continue;
                 };
                 let p = wide.prims[wide.leaves.first[group + i] as usize + lane];
-                if hit(p, &h, bound) {
+                if hit(p, ((group + i) * LANES + lane) as u32, &h, bound) {
                     return true;
                 }
             }
@@ -76,7 +77,9 @@ impl RayLeaves<'_> {
 /// The closest-hit query's leaf test and best hit so far.
 struct ClosestLeaves<'a> {
     leaves: RayLeaves<'a>,
-    best: Option<(u32, TriangleHit)>,
+    /// The best hit: the triangle's index, where it sits in the leaves (`group *
+    /// LANES + lane`) and the hit.
+    best: Option<(u32, u32, TriangleHit)>,
     /// The query's own t_max.
     limit: f32,
     /// Past the best t so far by more than the rounding of the triangle test's scaled
@@ -92,11 +95,11 @@ impl LeafVisitor for ClosestLeaves<'_> {
     fn leaf(&mut self, group: usize, count: usize, t_max: &mut f32) -> bool {
         let (best, limit) = (&mut self.best, self.limit);
         self.leaves
-            .hits::<true>(group, count, &mut self.bound, |p, h, bound| {
-                if best.is_none_or(|(bp, bh)| h.t < bh.t || (h.t == bh.t && p < bp)) {
+            .hits::<true>(group, count, &mut self.bound, |p, lane, h, bound| {
+                if best.is_none_or(|(bp, _, bh)| h.t < bh.t || (h.t == bh.t && p < bp)) {
                     *t_max = h.t;
                     *bound = h.t.next_up().next_up().next_up().min(limit);
-                    *best = Some((p, *h));
+                    *best = Some((p, lane, *h));
                 }
                 false
             })
@@ -115,7 +118,7 @@ impl<F: FnMut(u32, &TriangleHit) -> bool> LeafVisitor for AnyLeaves<'_, F> {
     fn leaf(&mut self, group: usize, count: usize, _: &mut f32) -> bool {
         let visit = &mut self.visit;
         self.leaves
-            .hits::<false>(group, count, &mut self.bound, |p, h, _| visit(p, h))
+            .hits::<false>(group, count, &mut self.bound, |p, _, h, _| visit(p, h))
     }
 }
 
@@ -124,12 +127,22 @@ impl WideBvh {
     /// triangles hit at exactly the same t (where two meet), the lowest index wins,
     /// whatever order the traversal meets them in.
     pub fn closest_hit(&self, ray: &Ray, t_max: f32) -> Option<(u32, TriangleHit)> {
+        closest_hit_dispatched(self, ray, t_max).map(|(p, _, h)| (p, h))
+    }
+
+    /// [`Self::closest_hit`] with where the triangle's vertices sit in `leaves`
+    /// (`group * LANES + lane`, for [`WideBvh::triangle_at`]): (prim, lane, hit).
+    pub fn closest_hit_at(&self, ray: &Ray, t_max: f32) -> Option<(u32, u32, TriangleHit)> {
         closest_hit_dispatched(self, ray, t_max)
     }
 
-    /// [`Self::closest_hit`] compiled for whatever target features the caller has.
+    /// [`Self::closest_hit_at`] compiled for whatever target features the caller has.
     #[inline(always)]
-    pub(super) fn closest_hit_inlined(&self, ray: &Ray, t_max: f32) -> Option<(u32, TriangleHit)> {
+    pub(super) fn closest_hit_inlined(
+        &self,
+        ray: &Ray,
+        t_max: f32,
+    ) -> Option<(u32, u32, TriangleHit)> {
         let mut leaves = ClosestLeaves {
             leaves: RayLeaves::new(self, ray),
             best: None,
@@ -191,7 +204,11 @@ impl<'a> RayLeaves<'a> {
 
 /// [`WideBvh::closest_hit`] for the best instruction set the CPU has.
 #[multiversion(targets("x86_64+avx2+fma", "x86_64+sse4.2"))]
-fn closest_hit_dispatched(wide: &WideBvh, ray: &Ray, t_max: f32) -> Option<(u32, TriangleHit)> {
+fn closest_hit_dispatched(
+    wide: &WideBvh,
+    ray: &Ray,
+    t_max: f32,
+) -> Option<(u32, u32, TriangleHit)> {
     wide.closest_hit_inlined(ray, t_max)
 }
 

@@ -262,11 +262,11 @@ fn dispatched_queries_match_the_baseline_build_bit_for_bit() {
     for (tris, seed) in [(random_tris(3000, 11), 12), (grid(16), 13)] {
         let (_, wide) = both(&tris, SplitMethod::SahBinned);
         for (ray, t_max) in rays(4000, seed) {
-            let bits = |h: Option<(u32, TriangleHit)>| {
-                h.map(|(p, h)| (p, [h.t, h.b0, h.b1, h.b2].map(f32::to_bits)))
+            let bits = |h: Option<(u32, u32, TriangleHit)>| {
+                h.map(|(p, lane, h)| (p, lane, [h.t, h.b0, h.b1, h.b2].map(f32::to_bits)))
             };
             assert_eq!(
-                bits(wide.closest_hit(&ray, t_max)),
+                bits(wide.closest_hit_at(&ray, t_max)),
                 bits(wide.closest_hit_inlined(&ray, t_max)),
                 "{ray:?}"
             );
@@ -361,8 +361,9 @@ fn exact_ties_on_box_faces_go_to_the_lowest_index() {
 fn each_triangle_reads_its_own_vertices_from_the_leaves() {
     for tris in [random_tris(1, 8), random_tris(2000, 9), grid(9)] {
         let (_, wide) = both(&tris, SplitMethod::SahBinned);
+        let lanes = wide.prim_lanes();
         for (p, tri) in tris.iter().enumerate() {
-            assert_eq!(wide.triangle(p as u32), *tri);
+            assert_eq!(wide.triangle_at(lanes[p]), *tri);
         }
         assert_eq!(wide.positions(), tris);
     }
@@ -375,15 +376,30 @@ fn each_triangle_reads_its_own_vertices_from_the_leaves() {
 }
 
 #[test]
-fn validate_catches_a_wrong_prim_lane() {
-    let tris = random_tris(300, 11);
-    let (_, wide) = both(&tris, SplitMethod::SahBinned);
-    let mut bad = wide.clone();
-    bad.prim_lanes.swap(0, 1);
-    assert!(bad.validate(&tris).is_err());
-    let mut bad = wide.clone();
-    bad.prim_lanes.pop();
-    assert!(bad.validate(&tris).is_err());
+fn closest_hits_lead_to_their_triangles_vertices() {
+    // The last: without acceleration, one leaf of many groups.
+    for (tris, single) in [
+        (random_tris(2000, 11), false),
+        (grid(9), false),
+        (random_tris(37, 10), true),
+    ] {
+        let wide = if single {
+            let bounds: Vec<Aabb> = tris.iter().map(|t| Aabb::from_points(t)).collect();
+            WideBvh::collapse(&Bvh::single_leaf(&bounds), &tris)
+        } else {
+            both(&tris, SplitMethod::SahBinned).1
+        };
+        let mut found = 0;
+        for (ray, t_max) in rays(2000, 14) {
+            let Some((p, lane, h)) = wide.closest_hit_at(&ray, t_max) else {
+                continue;
+            };
+            assert_eq!(wide.triangle_at(lane), tris[p as usize], "{ray:?}");
+            assert_eq!(wide.closest_hit(&ray, t_max), Some((p, h)));
+            found += 1;
+        }
+        assert!(found > 5, "{found} hits");
+    }
 }
 
 /// The collapse as first written (a `Vec` of children per node, `insert`), which the

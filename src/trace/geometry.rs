@@ -9,8 +9,10 @@ use std::sync::Arc;
 use bevy_ecs::prelude::*;
 use glam::{Vec2, Vec3};
 
+use super::crossings::Crossings;
 use super::materials::Materials;
 use super::plan::RenderPlan;
+use crate::accel::leaf::LANES;
 use crate::accel::sphere::{sphere_roots, sphere_uv};
 use crate::accel::triangle::{RayShear, TriangleHit, intersect_triangle_sheared};
 use crate::accel::{
@@ -59,6 +61,9 @@ pub struct Hit {
     /// For a triangle of an instanced mesh, the instance (index into
     /// `SceneGeometry::instanced.instances`); `prim` is then the mesh's own triangle index.
     pub instance: Option<u32>,
+    /// For a flattened triangle, where its vertices sit in `SceneGeometry::tri_wide`'s
+    /// leaves ([`WideBvh::triangle_at`]; see [`SceneGeometry::lane`]); zero otherwise.
+    pub lane: u32,
 }
 
 /// A triangle as shading reads it, in world space.
@@ -94,6 +99,9 @@ pub struct SceneGeometry {
     /// `tri_bvh` collapsed to 8-wide nodes with the triangles in leaf order: what
     /// unobserved queries traverse, and where every query reads a triangle's vertices.
     pub tri_wide: WideBvh,
+    /// Where each flattened triangle sits in `tri_wide`'s leaves: kept with `tri_bvh`
+    /// only, for its queries, which name triangles by index (a render's hits carry it).
+    pub tri_lanes: Vec<u32>,
     /// Spheres (world space).
     pub spheres: Vec<Sphere>,
     /// Material index of each sphere.
@@ -255,12 +263,25 @@ impl SceneGeometry {
     /// it then holds.
     pub fn collapse_triangle_bvh(&mut self, positions: &[[Vec3; 3]]) {
         self.tri_wide = WideBvh::collapse(&self.tri_bvh, positions);
+        self.tri_lanes = self.tri_wide.prim_lanes();
+    }
+
+    /// Where flattened triangle `prim` sits in `tri_wide`'s leaves: from `tri_lanes`
+    /// where kept, else searched (observers and tests only; a render's hits carry it).
+    pub fn lane(&self, prim: u32) -> u32 {
+        if let Some(&lane) = self.tri_lanes.get(prim as usize) {
+            return lane;
+        }
+        let wide = &self.tri_wide;
+        let slot = wide.prims.iter().position(|&p| p == prim).unwrap_or(0) as u32;
+        let group = wide.leaves.first.partition_point(|&f| f <= slot) - 1;
+        (group * LANES) as u32 + slot - wide.leaves.first[group]
     }
 
     /// The vertices of flattened triangle `prim`.
     #[inline]
     pub fn positions(&self, prim: u32) -> [Vec3; 3] {
-        self.tri_wide.triangle(prim)
+        self.tri_wide.triangle_at(self.lane(prim))
     }
 
     /// The vertices of every flattened triangle, in order.
@@ -290,9 +311,12 @@ impl SceneGeometry {
         let mut best: Option<Hit> = None;
         let mut t_max = t_max;
         if self.use_wide::<V>() {
-            if let Some((prim, h)) = self.tri_wide.closest_hit(ray, t_max) {
+            if let Some((prim, lane, h)) = self.tri_wide.closest_hit_at(ray, t_max) {
                 t_max = h.t;
-                best = Some(triangle_hit(prim, &h));
+                best = Some(Hit {
+                    lane,
+                    ..triangle_hit(prim, &h)
+                });
             }
         } else if !self.tri_bvh.nodes.is_empty() {
             visitor.begin_hierarchy(PrimKind::Triangle);
@@ -312,7 +336,10 @@ impl SceneGeometry {
             });
             if let (Some((prim, _)), Some((_, h))) = (found, last) {
                 t_max = h.t;
-                best = Some(triangle_hit(prim, &h));
+                best = Some(Hit {
+                    lane: self.lane(prim),
+                    ..triangle_hit(prim, &h)
+                });
             }
         }
         // After the flattened triangles and strictly closer: of hits at the same t,
@@ -339,6 +366,7 @@ impl SceneGeometry {
                     kind: PrimKind::Sphere,
                     bary: Vec3::ZERO,
                     instance: None,
+                    lane: 0,
                 });
             }
         }
@@ -486,7 +514,7 @@ impl SceneGeometry {
         let i = hit.prim as usize;
         let Some(instance) = hit.instance else {
             return TriangleData {
-                positions: self.positions(hit.prim),
+                positions: self.tri_wide.triangle_at(hit.lane),
                 normals: self.tri_normals[i],
                 texcoords: self.tri_texcoords[i],
                 material: self.tri_material[i],
@@ -542,41 +570,6 @@ impl SceneGeometry {
     }
 }
 
-/// A transparent surface a shadow ray crosses: (t, material, texture coordinate).
-type Crossing = (f32, u32, Vec2);
-
-/// Crossings of one shadow ray: the first few inline, so that the common case (a handful
-/// of glass surfaces) costs no allocation per ray; more spill to the heap.
-#[derive(Default)]
-struct Crossings {
-    inline: [Crossing; 8],
-    len: usize,
-    spill: Vec<Crossing>,
-}
-
-impl Crossings {
-    fn push(&mut self, c: Crossing) {
-        if self.len < self.inline.len() {
-            self.inline[self.len] = c;
-            self.len += 1;
-        } else {
-            self.spill.push(c);
-        }
-    }
-
-    /// All crossings in order of t.
-    fn sorted(&mut self) -> &[Crossing] {
-        let all = if self.spill.is_empty() {
-            &mut self.inline[..self.len]
-        } else {
-            self.spill.extend_from_slice(&self.inline[..self.len]);
-            &mut self.spill[..]
-        };
-        all.sort_unstable_by(|a, b| a.0.total_cmp(&b.0));
-        all
-    }
-}
-
 /// The scene's hit record of triangle `prim`.
 fn triangle_hit(prim: u32, h: &TriangleHit) -> Hit {
     Hit {
@@ -585,5 +578,6 @@ fn triangle_hit(prim: u32, h: &TriangleHit) -> Hit {
         kind: PrimKind::Triangle,
         bary: Vec3::new(h.b0, h.b1, h.b2),
         instance: None,
+        lane: 0,
     }
 }

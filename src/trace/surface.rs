@@ -41,28 +41,34 @@ pub fn surface_at(
     hit: &Hit,
     interpolate_normals: bool,
 ) -> Surface {
-    let (p, p_error, ng, n, uv, material) = match hit.kind {
-        PrimKind::Triangle => {
+    let (p, p_error, ng, n, uv, material) = match (hit.kind, hit.instance) {
+        // A flattened triangle: its parts read where they are, none copied or unused.
+        (PrimKind::Triangle, None) => {
+            let i = hit.prim as usize;
+            let positions = geometry.tri_wide.triangle_at(hit.lane);
+            let normals = interpolate_normals.then(|| &geometry.tri_normals[i]);
+            let (p, p_error, ng, n, uv) = triangle_point(
+                positions,
+                normals,
+                &geometry.tri_texcoords[i],
+                hit.bary,
+                None,
+            );
+            (p, p_error, ng, n, uv, geometry.tri_material[i])
+        }
+        (PrimKind::Triangle, Some(_)) => {
             let tri = geometry.triangle(hit);
-            let [p0, p1, p2] = tri.positions;
-            let b = hit.bary;
-            let p = b.x * p0 + b.y * p1 + b.z * p2;
-            let p_error = gamma(7) * ((b.x * p0).abs() + (b.y * p1).abs() + (b.z * p2).abs())
-                + tri.transform_error;
-            let ng = (p1 - p0).cross(p2 - p0).normalize_or(Vec3::Z);
-            let n = if interpolate_normals {
-                let [n0, n1, n2] = tri.normals;
-                // Clamp so rounding just outside the triangle cannot flip the blend.
-                let w = b.max(Vec3::ZERO);
-                (w.x * n0 + w.y * n1 + w.z * n2).normalize_or(ng)
-            } else {
-                ng
-            };
-            let [t0, t1, t2] = tri.texcoords;
-            let uv = b.x * t0 + b.y * t1 + b.z * t2;
+            let normals = interpolate_normals.then_some(&tri.normals);
+            let (p, p_error, ng, n, uv) = triangle_point(
+                tri.positions,
+                normals,
+                &tri.texcoords,
+                hit.bary,
+                Some(tri.transform_error),
+            );
             (p, p_error, ng, n, uv, tri.material)
         }
-        PrimKind::Sphere => {
+        (PrimKind::Sphere, _) => {
             let s = &geometry.spheres[hit.prim as usize];
             let raw = ray.origin + hit.t * ray.dir;
             // Re-project onto the sphere: this removes most of the error of `o + t d`.
@@ -89,6 +95,37 @@ pub fn surface_at(
         uv,
         material,
     }
+}
+
+/// Position, its error bound, geometric and shading normals and texture coordinate at
+/// barycentric weights `b` of a triangle; `normals` for interpolated shading normals,
+/// `transform_error` for an instance's (none for flattened triangles, where it is zero).
+#[inline(always)]
+fn triangle_point(
+    positions: [Vec3; 3],
+    normals: Option<&[Vec3; 3]>,
+    texcoords: &[Vec2; 3],
+    b: Vec3,
+    transform_error: Option<Vec3>,
+) -> (Vec3, Vec3, Vec3, Vec3, Vec2) {
+    let [p0, p1, p2] = positions;
+    let p = b.x * p0 + b.y * p1 + b.z * p2;
+    let p_error = gamma(7) * ((b.x * p0).abs() + (b.y * p1).abs() + (b.z * p2).abs());
+    // Adding a zero error would change nothing: the bound is a sum of absolute values,
+    // never -0.
+    let p_error = transform_error.map_or(p_error, |e| p_error + e);
+    let ng = (p1 - p0).cross(p2 - p0).normalize_or(Vec3::Z);
+    let n = match normals {
+        Some([n0, n1, n2]) => {
+            // Clamp so rounding just outside the triangle cannot flip the blend.
+            let w = b.max(Vec3::ZERO);
+            (w.x * *n0 + w.y * *n1 + w.z * *n2).normalize_or(ng)
+        }
+        None => ng,
+    };
+    let [t0, t1, t2] = *texcoords;
+    let uv = b.x * t0 + b.y * t1 + b.z * t2;
+    (p, p_error, ng, n, uv)
 }
 
 /// A ray origin just off the surface at `p`, on the side of `ng` that `w` points to.
