@@ -233,7 +233,9 @@ pub fn load_instanced(path: &Path) -> Result<(Vec<[Vec3; 3]>, usize, TwoLevelBvh
         let mesh = &two.meshes[instance.mesh as usize];
         let m = &instance.world_from_object;
         tris.extend(
-            (0..mesh.prims.len() as u32).map(|p| mesh.triangle(p).map(|v| m.transform_point3(v))),
+            mesh.positions()
+                .into_iter()
+                .map(|t| t.map(|v| m.transform_point3(v))),
         );
     }
     Ok((tris, flattened, two))
