@@ -11,6 +11,7 @@
 //! and `rtcore_ray.h`.
 
 use std::ffi::{CString, c_char, c_void};
+use std::mem::ManuallyDrop;
 use std::ptr::null_mut;
 use std::sync::atomic::{AtomicIsize, Ordering};
 
@@ -100,8 +101,10 @@ unsafe extern "C" fn count_bytes(_user: *mut c_void, bytes: isize, _post: bool) 
 pub struct Embree {
     api: Api,
     device: Handle,
-    // Dropped last: the function pointers above point into it.
-    _lib: Library,
+    // Never unloaded: the device's TBB worker threads outlive `rtcReleaseDevice`, and
+    // unloading the library under them crashed the process at exit (SIGSEGV in about
+    // one run of three of `anchors -- sponza`). The function pointers above point into it.
+    _lib: ManuallyDrop<Library>,
 }
 
 /// A committed Embree scene of one triangle mesh.
@@ -156,7 +159,7 @@ impl Embree {
         Ok(Embree {
             api,
             device,
-            _lib: lib,
+            _lib: ManuallyDrop::new(lib),
         })
     }
 
