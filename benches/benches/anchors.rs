@@ -59,6 +59,8 @@ enum Peer<'a> {
     GlintInstanced(&'a WideBvh, &'a TwoLevelBvh),
     Obvhs(&'a CwBvh, &'a [Triangle]),
     Embree(&'a EmbreeScene<'a>),
+    /// Embree's 16-ray packets over consecutive rays of a set (what packets buy).
+    Embree16(&'a EmbreeScene<'a>),
     TinyBvh(&'a TinyBvh8),
 }
 
@@ -70,6 +72,7 @@ impl Peer<'_> {
             Peer::GlintInstanced(..) => "glint-2level",
             Peer::Obvhs(..) => "obvhs",
             Peer::Embree(..) => "embree",
+            Peer::Embree16(..) => "embree16",
             Peer::TinyBvh(..) => "tinybvh8",
         }
     }
@@ -127,6 +130,10 @@ impl Peer<'_> {
                 |r| s.occluded(r, 1.0),
                 |r| s.closest(r).is_some(),
             ),
+            Peer::Embree16(s) => {
+                let t_max = if shadow { 1.0 } else { f32::INFINITY };
+                rays.chunks(16).map(|c| s.hits16(c, shadow, t_max)).sum()
+            }
             Peer::TinyBvh(b) => count_hits(
                 rays,
                 shadow,
@@ -312,6 +319,7 @@ fn bench_mesh(
     }
     if let Some(s) = &escene {
         peers.push(Peer::Embree(s));
+        peers.push(Peer::Embree16(s));
     }
 
     let ray_sets: [(&str, Vec<Ray>); 3] = [

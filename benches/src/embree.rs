@@ -65,6 +65,31 @@ struct RtcRayHit {
     hit: RtcHit,
 }
 
+/// `RTCRayHit16`: `RTCRay16` then `RTCHit16`, each a structure of 16-lane arrays.
+/// `rest` covers the hit's instance fields (their count depends on how Embree was
+/// built) with room to spare; nothing after `geom_id` is read.
+#[repr(C, align(64))]
+struct RtcRayHit16 {
+    org: [[f32; 16]; 3],
+    tnear: [f32; 16],
+    dir: [[f32; 16]; 3],
+    time: [f32; 16],
+    tfar: [f32; 16],
+    mask: [u32; 16],
+    id: [u32; 16],
+    flags: [u32; 16],
+    ng: [[f32; 16]; 3],
+    u: [f32; 16],
+    v: [f32; 16],
+    prim_id: [u32; 16],
+    geom_id: [u32; 16],
+    rest: [[u32; 16]; 8],
+}
+
+/// The `valid` argument of the 16-ray calls: -1 for a lane in use, 0 otherwise.
+#[repr(C, align(64))]
+struct Valid16([i32; 16]);
+
 type Handle = *mut c_void;
 
 /// The entry points used, resolved once.
@@ -82,6 +107,9 @@ struct Api {
     release_geometry: unsafe extern "C" fn(Handle),
     intersect1: unsafe extern "C" fn(Handle, *mut RtcRayHit, *mut c_void),
     occluded1: unsafe extern "C" fn(Handle, *mut RtcRay, *mut c_void),
+    intersect16: unsafe extern "C" fn(*const Valid16, Handle, *mut RtcRayHit16, *mut c_void),
+    // Takes an `RTCRay16`, the first part of an `RTCRayHit16`.
+    occluded16: unsafe extern "C" fn(*const Valid16, Handle, *mut RtcRayHit16, *mut c_void),
     set_memory_monitor: unsafe extern "C" fn(Handle, MemoryMonitor, *mut c_void),
 }
 
@@ -146,6 +174,8 @@ impl Embree {
             release_geometry: sym!("rtcReleaseGeometry"),
             intersect1: sym!("rtcIntersect1"),
             occluded1: sym!("rtcOccluded1"),
+            intersect16: sym!("rtcIntersect16"),
+            occluded16: sym!("rtcOccluded16"),
             set_memory_monitor: sym!("rtcSetDeviceMemoryMonitorFunction"),
         };
         let config = CString::new(config).map_err(|e| e.to_string())?;
@@ -279,5 +309,43 @@ impl EmbreeScene<'_> {
         // SAFETY: a committed scene and an aligned RTCRay; NULL arguments mean defaults.
         unsafe { (self.embree.api.occluded1)(self.scene, &mut r, null_mut()) };
         r.tfar == f32::NEG_INFINITY
+    }
+
+    /// Hits among up to 16 rays traced as one packet (`rtcIntersect16`, or
+    /// `rtcOccluded16` up to `t_max` when `shadow`): Embree's packet kernels, which
+    /// pay when the rays are coherent.
+    pub fn hits16(&self, rays: &[Ray], shadow: bool, t_max: f32) -> u32 {
+        assert!(rays.len() <= 16);
+        // SAFETY: all-zero bits are valid for every field (plain numbers).
+        let mut p: RtcRayHit16 = unsafe { std::mem::zeroed() };
+        let mut valid = Valid16([0; 16]);
+        for (i, r) in rays.iter().enumerate() {
+            for a in 0..3 {
+                p.org[a][i] = r.origin[a];
+                p.dir[a][i] = r.dir[a];
+            }
+            p.tfar[i] = t_max;
+            p.mask[i] = u32::MAX;
+            p.geom_id[i] = RTC_INVALID_GEOMETRY_ID;
+            valid.0[i] = -1;
+        }
+        // SAFETY: a committed scene, 64-byte aligned `valid` and packet (the packet with
+        // room past the hit fields); NULL arguments mean defaults.
+        unsafe {
+            if shadow {
+                (self.embree.api.occluded16)(&valid, self.scene, &mut p, null_mut());
+            } else {
+                (self.embree.api.intersect16)(&valid, self.scene, &mut p, null_mut());
+            }
+        }
+        (0..rays.len())
+            .filter(|&i| {
+                if shadow {
+                    p.tfar[i] == f32::NEG_INFINITY
+                } else {
+                    p.geom_id[i] != RTC_INVALID_GEOMETRY_ID
+                }
+            })
+            .count() as u32
     }
 }
