@@ -96,6 +96,14 @@ fn triangles_named_by_index_lead_to_their_vertices_with_or_without_the_binary_tr
 }
 
 #[test]
+#[should_panic(expected = "triangle 34 is not in the scene's wide BVH")]
+fn a_triangle_index_past_the_scene_is_refused_not_read_from_another_lane() {
+    let mut r = load(&std::fs::read_to_string("scenes/cornell_box.ron").unwrap());
+    r.prepare().unwrap();
+    r.world.resource::<SceneGeometry>().positions(34);
+}
+
+#[test]
 fn a_render_keeps_only_the_wide_triangle_bvh() {
     let mut r = load(&std::fs::read_to_string("scenes/cornell_box.ron").unwrap());
     r.render(None, &mut |_| {}).unwrap();

@@ -268,12 +268,19 @@ impl SceneGeometry {
 
     /// Where flattened triangle `prim` sits in `tri_wide`'s leaves: from `tri_lanes`
     /// where kept, else searched (observers and tests only; a render's hits carry it).
+    /// Panics when `prim` is not a flattened triangle of this scene: a caller's bug,
+    /// which a fallback lane would turn into another triangle's vertices.
     pub fn lane(&self, prim: u32) -> u32 {
         if let Some(&lane) = self.tri_lanes.get(prim as usize) {
             return lane;
         }
         let wide = &self.tri_wide;
-        let slot = wide.prims.iter().position(|&p| p == prim).unwrap_or(0) as u32;
+        let slot = wide
+            .prims
+            .iter()
+            .position(|&p| p == prim)
+            .unwrap_or_else(|| panic!("triangle {prim} is not in the scene's wide BVH"))
+            as u32;
         let group = wide.leaves.first.partition_point(|&f| f <= slot) - 1;
         (group * LANES) as u32 + slot - wide.leaves.first[group]
     }
