@@ -28,8 +28,8 @@ use glint::accel::{Aabb, Bvh, Ray, SplitMethod, TwoLevelBvh, WideBvh};
 use glint_bench::embree::{Embree, EmbreeScene};
 use glint_bench::tinybvh::TinyBvh8;
 use glint_bench::{
-    View, assets_dir, displaced_torus, find_file, glint_closest, glint_occluded, incoherent_rays,
-    load_instanced, primary_rays, shadow_rays,
+    View, assets_dir, cornell_scene, displaced_torus, find_file, glint_closest, glint_occluded,
+    incoherent_rays, load_instanced, load_model, primary_rays, shadow_rays,
 };
 use obvhs::BvhBuildParams;
 use obvhs::cwbvh::{CwBvh, builder::build_cwbvh_from_tris};
@@ -388,6 +388,14 @@ fn main() {
             embree,
             None,
         );
+    }
+    if wanted("cornell") {
+        // The 34 triangles of the whole-render benchmark's scene, from its own camera:
+        // how the peers compare where the render spends its time.
+        match load_model(&cornell_scene()) {
+            Ok(tris) => bench_mesh("cornell", &tris, &View::cornell(), embree, None),
+            Err(e) => println!("skipping cornell: {e}"),
+        }
     }
     let Some(assets) = assets_dir() else {
         println!("skipping the real models: ../shared/assets is absent");

@@ -300,4 +300,22 @@ impl View {
             star_centre: None,
         }
     }
+
+    /// `scenes/cornell_box_parallelogram_light.ron` (the whole-render benchmark's
+    /// scene): its camera, and its light's centre as the point light.
+    pub fn cornell() -> Self {
+        Self {
+            eye: vec3(0.0, 1.0, 3.9),
+            target: vec3(0.0, 1.0, 0.0),
+            fov_y_degrees: 40.0,
+            light: vec3(0.0, 1.99, 0.0),
+            offset: 1e-4,
+            star_centre: None,
+        }
+    }
+}
+
+/// The whole-render benchmark's scene file, in the repository.
+pub fn cornell_scene() -> PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR")).join("../scenes/cornell_box_parallelogram_light.ron")
 }
