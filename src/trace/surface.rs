@@ -128,14 +128,23 @@ fn triangle_point(
     (p, p_error, ng, n, uv)
 }
 
+/// The least magnitude of an origin coordinate that [`offset_ray_origin`] moves off a
+/// surface: 2^-100, a normal float whose products with anything above 2^-26 stay normal.
+pub const MIN_OFFSET_COORDINATE: f32 = 7.888_609e-31;
+
 /// A ray origin just off the surface at `p`, on the side of `ng` that `w` points to.
 pub fn offset_ray_origin(p: Vec3, p_error: Vec3, ng: Vec3, w: Vec3) -> Vec3 {
     let side = if w.dot(ng) < 0.0 { -ng } else { ng };
     let mut po = p + ng.abs().dot(p_error) * side;
     // Round away from the surface, so the origin leaves it even where the error bound
     // is zero (a plane through the origin of an axis) and the addition rounds back.
+    // Off such a plane, not to the next float: that is subnormal (1.4e-45), and every
+    // box and triangle test of the ray then works on subnormals, which x86 handles in
+    // microcode (the Cornell render, whose floor is y = 0, took twice as long).
     for i in 0..3 {
-        if side[i] > 0.0 {
+        if side[i] != 0.0 && po[i].abs() < MIN_OFFSET_COORDINATE {
+            po[i] = MIN_OFFSET_COORDINATE.copysign(side[i]);
+        } else if side[i] > 0.0 {
             po[i] = po[i].next_up();
         } else if side[i] < 0.0 {
             po[i] = po[i].next_down();
@@ -176,5 +185,40 @@ impl Surface {
             origin,
             dir: target - origin,
         }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn the_least_offset_coordinate_is_two_to_the_minus_100() {
+        assert_eq!(MIN_OFFSET_COORDINATE, 2f32.powi(-100));
+        assert!(MIN_OFFSET_COORDINATE.is_normal());
+    }
+
+    #[test]
+    fn an_origin_leaving_a_plane_through_zero_is_off_it_and_not_subnormal() {
+        // A point of the floor y = 0 with no rounding error: the origin must leave the
+        // plane on the normal's side, by a normal float, in either direction.
+        for (ng, w, y) in [
+            (Vec3::Y, Vec3::Y, MIN_OFFSET_COORDINATE),
+            (Vec3::Y, -Vec3::Y, -MIN_OFFSET_COORDINATE),
+            (-Vec3::Y, Vec3::Y, MIN_OFFSET_COORDINATE),
+        ] {
+            let o = offset_ray_origin(Vec3::new(0.3, 0.0, -0.7), Vec3::ZERO, ng, w);
+            assert_eq!(o, Vec3::new(0.3, y, -0.7));
+            assert!(o.y.is_normal());
+        }
+        // A subnormal coordinate is moved past the least offset, away from the surface.
+        let o = offset_ray_origin(Vec3::new(0.0, 1e-40, 0.0), Vec3::ZERO, Vec3::Y, Vec3::Y);
+        assert_eq!(o.y, MIN_OFFSET_COORDINATE);
+    }
+
+    #[test]
+    fn an_origin_off_a_plane_away_from_zero_moves_by_one_float() {
+        let o = offset_ray_origin(Vec3::new(0.0, 2.0, 0.5), Vec3::ZERO, -Vec3::Y, -Vec3::Y);
+        assert_eq!(o, Vec3::new(0.0, 2.0f32.next_down(), 0.5));
     }
 }
