@@ -459,17 +459,22 @@ pub fn trace_shadow_rays(
     mut stats: ResMut<RenderStats>,
 ) {
     let t_max = 1.0 - SHADOW_EPSILON;
-    let transparent = plan.transparent_shadows;
     let wf = &mut *wf;
-    wf.shadow_rays.trace(&mut wf.ray_radiance, |s| {
-        if transparent {
+    // One closure per mode, chosen once: with the transmittance walk (and its crossings
+    // buffer) in the same closure, every binary shadow ray paid its 6 KB stack frame.
+    if plan.transparent_shadows {
+        wf.shadow_rays.trace(&mut wf.ray_radiance, |s| {
             s.contribution * geometry.transmittance(&s.ray, t_max, &materials, &mut ())
-        } else if geometry.occluded(&s.ray, t_max, &mut ()) {
-            Vec3::ZERO
-        } else {
-            s.contribution
-        }
-    });
+        });
+    } else {
+        wf.shadow_rays.trace(&mut wf.ray_radiance, |s| {
+            if geometry.occluded(&s.ray, t_max, &mut ()) {
+                Vec3::ZERO
+            } else {
+                s.contribution
+            }
+        });
+    }
     let n = wf.shadow_rays.len() as u64;
     stats.record(Stage::TraceShadowRays, n);
     stats.rays.shadow += n;
