@@ -6,7 +6,13 @@ use crate::scene::{ParallelogramLight, SegmentLight};
 
 /// `x` clamped to [0, 1], with NaN sent to 0 so a bad sample cannot poison a light.
 fn unit(x: f32) -> f32 {
-    if x > 0.0 { x.min(1.0) } else { 0.0 }
+    // `x < 1.0` rather than `x.min(1.0)`: x is no NaN here, so the two agree, and the
+    // comparison is one `minss` where `min` added a NaN-aware blend per sample.
+    if x > 0.0 {
+        if x < 1.0 { x } else { 1.0 }
+    } else {
+        0.0
+    }
 }
 
 /// Position and colour of the segment light at s in [0,1) (SPEC).

@@ -2,14 +2,11 @@
 
 use glam::Vec2;
 
-use super::sobol::{sobol_1d, sobol_2d};
+use super::sobol::{SobolSeeds, sobol_1d, sobol_1d_seeded, sobol_2d, sobol_2d_seeded};
 use crate::scene::SamplerKind;
 
 /// The dimension of the pixel offset; the offset uses dimensions 0 and 1.
 pub const DIM_PIXEL: u32 = 0;
-
-/// The largest `f32` below 1, the upper bound of every value handed out.
-const BELOW_ONE: f32 = 1.0 - f32::EPSILON / 2.0;
 
 /// Field widths of the packed light dimension (see [`light_dim`]).
 const DEPTH_BITS: u32 = 4;
@@ -140,9 +137,10 @@ impl Sampler {
 /// A number in [0, 1) from a 64-bit hash.
 fn unit_from_hash(h: u64) -> f32 {
     // 24 bits fill an f32 mantissa exactly: the result is a multiple of
-    // 2^-24 and at most 1 - 2^-24, never 1.0.
+    // 2^-24 and at most 1 - 2^-24 (the largest f32 below 1), never 1.0, with no rounding and no
+    // clamp (a `min(BELOW_ONE)` here changed nothing and cost a NaN-aware blend).
     let bits = (h >> 40) as u32;
-    (bits as f32 * (1.0 / 16_777_216.0)).min(BELOW_ONE)
+    bits as f32 * (1.0 / 16_777_216.0)
 }
 
 /// The light samples of one camera sample ([`Sampler::at`]): the same numbers as
@@ -189,16 +187,26 @@ impl PointSampler {
     /// scramble seed is hashed here, once, instead of once per sample.
     #[inline]
     pub fn slot(&self, slot: LightSlot, n: u32) -> SlotSampler {
-        let (base, seed) = match self.kind {
-            SamplerKind::Independent => (0, 0),
-            _ => self.light_point(slot, 0, n),
+        let (base, seeds, first_dim) = match self.kind {
+            SamplerKind::Independent => {
+                let (depth, path, light) = slot;
+                (
+                    0,
+                    SobolSeeds::default(),
+                    packed_light_dim(depth, path, light),
+                )
+            }
+            _ => {
+                let (base, seed) = self.light_point(slot, 0, n);
+                (base, SobolSeeds::new(seed), None)
+            }
         };
         SlotSampler {
             point: *self,
             slot,
-            n,
             base,
-            seed,
+            seeds,
+            first_dim,
         }
     }
 
@@ -230,29 +238,49 @@ impl PointSampler {
 pub struct SlotSampler {
     point: PointSampler,
     slot: LightSlot,
-    n: u32,
     /// Sobol' index of sample 0 (low-discrepancy kinds); sample k is `base + k`.
     base: u32,
-    /// The slot's scramble seed (low-discrepancy kinds).
-    seed: u32,
+    /// The hashes of the slot's scramble seed (low-discrepancy kinds), once per slot
+    /// rather than once per sample.
+    seeds: SobolSeeds,
+    /// `light_dim(depth, path, light, 0)` when the slot's (depth, path, light) are
+    /// packed exactly (independent kind): sample k's dimension is then `first + 2 k`.
+    first_dim: Option<u32>,
 }
 
 impl SlotSampler {
-    /// Sample `k` of the slot, 1D.
+    /// `light_dim` of sample `k` of the slot (independent kind).
     #[inline]
+    fn dim(&self, k: u32) -> u32 {
+        match self.first_dim {
+            // Packed: k fills the low field, which is zero in `first`.
+            Some(first) if k < 1 << LIGHT_SAMPLE_BITS => first + 2 * k,
+            _ => {
+                let (depth, path, light) = self.slot;
+                light_dim(depth, path, light, k)
+            }
+        }
+    }
+
+    /// Sample `k` of the slot, 1D.
+    // Always inlined into the light-sample loop: as a call, the slot went through memory.
+    #[inline(always)]
     pub fn light1(&self, k: u32) -> f32 {
         match self.point.kind {
-            SamplerKind::Independent => self.point.light1(self.slot, k, self.n),
-            _ => sobol_1d(self.base.wrapping_add(k), self.seed),
+            SamplerKind::Independent => self.point.get1(self.dim(k)),
+            _ => sobol_1d_seeded(self.base.wrapping_add(k), &self.seeds),
         }
     }
 
     /// Sample `k` of the slot, 2D.
-    #[inline]
+    #[inline(always)]
     pub fn light2(&self, k: u32) -> Vec2 {
         match self.point.kind {
-            SamplerKind::Independent => self.point.light2(self.slot, k, self.n),
-            _ => Vec2::from(sobol_2d(self.base.wrapping_add(k), self.seed)),
+            SamplerKind::Independent => {
+                let dim = self.dim(k);
+                Vec2::new(self.point.get1(dim), self.point.get1(dim.wrapping_add(1)))
+            }
+            _ => Vec2::from(sobol_2d_seeded(self.base.wrapping_add(k), &self.seeds)),
         }
     }
 }
@@ -266,23 +294,31 @@ impl SlotSampler {
 /// collisions are possible but rare. The sampler hashes the dimension again,
 /// so consecutive dimensions are as independent as any others.
 pub fn light_dim(depth: u32, path: u32, light: u32, light_sample: u32) -> u32 {
-    let fits = depth < (1 << DEPTH_BITS)
-        && path < (1 << PATH_BITS)
-        && light < (1 << LIGHT_BITS)
-        && light_sample < (1 << LIGHT_SAMPLE_BITS);
-    if fits {
-        let packed = (((depth << PATH_BITS | path) << LIGHT_BITS | light) << LIGHT_SAMPLE_BITS)
-            | light_sample;
-        // packed < 2^30, so 2 + 2 * packed < 2^31: even, above the pixel dims.
-        2 + 2 * packed
-    } else {
-        let h = mix64(
-            mix64((u64::from(depth) << 32) | u64::from(path))
-                ^ ((u64::from(light) << 32) | u64::from(light_sample)),
-        );
-        // Top bit set keeps this range apart from the packed one; low bit clear keeps it even.
-        ((h >> 32) as u32 | 0x8000_0000) & !1
+    match packed_light_dim(depth, path, light) {
+        // Light sample 0's packed field is zero: `light_sample` fills it.
+        Some(first) if light_sample < (1 << LIGHT_SAMPLE_BITS) => first + 2 * light_sample,
+        _ => hashed_light_dim(depth, path, light, light_sample),
     }
+}
+
+/// `light_dim(depth, path, light, 0)` when (depth, path, light) are packed exactly.
+fn packed_light_dim(depth: u32, path: u32, light: u32) -> Option<u32> {
+    let fits = depth < (1 << DEPTH_BITS) && path < (1 << PATH_BITS) && light < (1 << LIGHT_BITS);
+    // packed < 2^30, so 2 + 2 * packed < 2^31: even, above the pixel dims.
+    fits.then(|| 2 + 2 * (((depth << PATH_BITS | path) << LIGHT_BITS | light) << LIGHT_SAMPLE_BITS))
+}
+
+/// `light_dim` outside the packed range.
+// Cold and out of line: inlined, LLVM hoisted part of its hash into every shading point.
+#[cold]
+#[inline(never)]
+fn hashed_light_dim(depth: u32, path: u32, light: u32, light_sample: u32) -> u32 {
+    let h = mix64(
+        mix64((u64::from(depth) << 32) | u64::from(path))
+            ^ ((u64::from(light) << 32) | u64::from(light_sample)),
+    );
+    // Top bit set keeps this range apart from the packed one; low bit clear keeps it even.
+    ((h >> 32) as u32 | 0x8000_0000) & !1
 }
 
 #[cfg(test)]
@@ -431,7 +467,18 @@ mod tests {
             let s = Sampler::with_kind(9, kind);
             for (pixel, sample) in [(0, 0), (5, 1), (4000, 6), (77, 13)] {
                 let point = s.at(pixel, sample);
-                for (slot, k, n) in [((0, 0, 0), 0, 1), ((1, 2, 3), 3, 4), ((2, 5, 600), 7, 9)] {
+                // The edges of light_dim's packed fields too: the slot's first dimension
+                // plus 2 k holds only inside them.
+                for (slot, k, n) in [
+                    ((0, 0, 0), 0, 1),
+                    ((1, 2, 3), 3, 4),
+                    ((2, 5, 600), 7, 9),
+                    ((15, 255, 511), 511, 512),
+                    ((15, 255, 511), 512, 600),
+                    ((16, 0, 0), 1, 2),
+                    ((0, 256, 0), 1, 2),
+                    ((0, 0, 512), 1, 2),
+                ] {
                     let (depth, path, light) = slot;
                     let (u, uv) = match kind {
                         SamplerKind::Independent => {
@@ -458,6 +505,14 @@ mod tests {
                 }
             }
         }
+    }
+
+    #[test]
+    fn unit_values_stay_below_one_unclamped() {
+        // The largest f32 below 1: what the all-ones hash gives, exactly.
+        assert_eq!(unit_from_hash(u64::MAX), 1.0 - f32::EPSILON / 2.0);
+        assert_eq!(unit_from_hash(0), 0.0);
+        assert_eq!(unit_from_hash(1 << 40), 1.0 / 16_777_216.0);
     }
 
     #[test]

@@ -62,32 +62,50 @@ fn to_unit(bits: u32) -> f32 {
     (bits as f32 * SCALE).min(BELOW_ONE)
 }
 
-/// The shuffled index of point `index` for `seed`.
-fn shuffled(index: u32, seed: u32) -> u32 {
-    nested_uniform_scramble(index, hash32(seed))
+/// The three hashes a sequence's `seed` gives (index shuffle, scramble of each
+/// dimension): computed once for the many points of one seed.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct SobolSeeds {
+    shuffle: u32,
+    dim0: u32,
+    dim1: u32,
+}
+
+impl SobolSeeds {
+    /// The hashes of `seed`.
+    pub fn new(seed: u32) -> Self {
+        Self {
+            shuffle: hash32(seed),
+            dim0: hash32(seed ^ 0x5bd1_e995),
+            dim1: hash32(seed ^ 0x68e3_1da4),
+        }
+    }
 }
 
 /// Point `index` of the 1D Owen-scrambled Sobol' (van der Corput) sequence for `seed`, in [0, 1).
 pub fn sobol_1d(index: u32, seed: u32) -> f32 {
-    let i = shuffled(index, seed);
-    to_unit(nested_uniform_scramble(
-        i.reverse_bits(),
-        hash32(seed ^ 0x5bd1_e995),
-    ))
+    sobol_1d_seeded(index, &SobolSeeds::new(seed))
 }
 
 /// Point `index` of the 2D Owen-scrambled Sobol' sequence for `seed`, in [0, 1)^2.
 pub fn sobol_2d(index: u32, seed: u32) -> [f32; 2] {
-    let i = shuffled(index, seed);
+    sobol_2d_seeded(index, &SobolSeeds::new(seed))
+}
+
+/// [`sobol_1d`] with the seed's hashes given.
+#[inline]
+pub fn sobol_1d_seeded(index: u32, seeds: &SobolSeeds) -> f32 {
+    let i = nested_uniform_scramble(index, seeds.shuffle);
+    to_unit(nested_uniform_scramble(i.reverse_bits(), seeds.dim0))
+}
+
+/// [`sobol_2d`] with the seed's hashes given.
+#[inline]
+pub fn sobol_2d_seeded(index: u32, seeds: &SobolSeeds) -> [f32; 2] {
+    let i = nested_uniform_scramble(index, seeds.shuffle);
     [
-        to_unit(nested_uniform_scramble(
-            i.reverse_bits(),
-            hash32(seed ^ 0x5bd1_e995),
-        )),
-        to_unit(nested_uniform_scramble(
-            sobol_dim1(i),
-            hash32(seed ^ 0x68e3_1da4),
-        )),
+        to_unit(nested_uniform_scramble(i.reverse_bits(), seeds.dim0)),
+        to_unit(nested_uniform_scramble(sobol_dim1(i), seeds.dim1)),
     ]
 }
 

@@ -5,6 +5,6 @@ pub mod models;
 pub mod texture;
 
 pub use models::{
-    Shading, ShadingInput, blinn_phong, lambertian, linear_gradient, linear_gradient_comparison,
-    phong,
+    Model, Shading, ShadingInput, WithModel, blinn_phong, lambertian, linear_gradient,
+    linear_gradient_comparison, phong,
 };

@@ -66,6 +66,53 @@ impl Shading<'_> {
     }
 }
 
+/// A shading model fixed at compile time ([`Shading::dispatch`]): code generic over it is
+/// compiled once per model, without [`Shading::shade`]'s per-sample branches on the
+/// settings. Each gives `Shading::shade`'s value for its settings, bit for bit.
+pub trait Model: Copy + Sync {
+    /// The light sample's contribution.
+    fn shade(&self, input: &ShadingInput) -> Vec3;
+}
+
+/// [`lambertian`], the model of the render benchmark (and of Mitsuba's comparison).
+#[derive(Clone, Copy, Debug)]
+pub struct LambertianModel;
+
+impl Model for LambertianModel {
+    #[inline(always)]
+    fn shade(&self, i: &ShadingInput) -> Vec3 {
+        lambertian(i)
+    }
+}
+
+/// The settings' model read per sample.
+impl Model for Shading<'_> {
+    #[inline(always)]
+    fn shade(&self, i: &ShadingInput) -> Vec3 {
+        Shading::shade(self, i)
+    }
+}
+
+/// Code run with the settings' shading model as a type ([`Shading::dispatch`]).
+pub trait WithModel {
+    /// What the code returns.
+    type Output;
+    /// Runs the code with `model`.
+    fn run<M: Model>(self, model: M) -> Self::Output;
+}
+
+impl Shading<'_> {
+    /// Runs `code` with the [`Model`] these settings select: Lambertian as a type of its
+    /// own, the others as the settings read per sample. (A copy per model was tried:
+    /// Lambertian's pays, Phong's came out 16 instructions per ray slower than this.)
+    pub fn dispatch<W: WithModel>(&self, code: W) -> W::Output {
+        match (self.enabled, self.model) {
+            (true, ShadingModel::Lambertian) => code.run(LambertianModel),
+            _ => code.run(*self),
+        }
+    }
+}
+
 /// Whether the light is on the viewer's side of the surface (`n.l > 0`; NaN is not).
 fn lit(i: &ShadingInput) -> bool {
     i.n.dot(i.l) > 0.0
@@ -477,5 +524,49 @@ mod tests {
         // l = -v cannot happen when n faces the viewer, but must not be NaN.
         let k = input(at_angle(10.0), -at_angle(10.0));
         assert!(blinn_phong(&k).is_finite());
+    }
+
+    #[test]
+    fn dispatched_models_give_the_settings_shading_bit_for_bit() {
+        /// Shades one input with the dispatched model.
+        struct Probe(ShadingInput);
+        impl WithModel for Probe {
+            type Output = Vec3;
+            fn run<M: Model>(self, model: M) -> Vec3 {
+                model.shade(&self.0)
+            }
+        }
+        let (g, c) = (Gradient::default_shading(), Gradient::default_comparison());
+        let mut inputs = vec![
+            input(at_angle(30.0), at_angle(-30.0)),
+            input(at_angle(30.0), Vec3::Z),
+            input(at_angle(60.0), at_angle(10.0)),
+            input(at_angle(100.0), Vec3::Z),
+        ];
+        let mut bad = input(at_angle(20.0), Vec3::Z);
+        bad.light_color = Vec3::new(f32::NAN, f32::INFINITY, 1.0);
+        inputs.push(bad);
+        let bits = |v: Vec3| v.to_array().map(f32::to_bits);
+        for enabled in [true, false] {
+            for model in [
+                ShadingModel::Lambertian,
+                ShadingModel::Phong,
+                ShadingModel::BlinnPhong,
+                ShadingModel::LinearGradient,
+                ShadingModel::LinearGradientComparison,
+            ] {
+                let s = Shading {
+                    enabled,
+                    ..shading(model, &g, &c)
+                };
+                for i in &inputs {
+                    assert_eq!(
+                        bits(s.dispatch(Probe(*i))),
+                        bits(s.shade(i)),
+                        "{model:?} enabled {enabled}"
+                    );
+                }
+            }
+        }
     }
 }

@@ -85,13 +85,22 @@ impl Lights {
 }
 
 /// Sample `k` of an area light's slot, 1D (every area light has a slot).
+// Inlined into the light-sample loop (as `map_or`, it stayed a call per sample).
+#[inline(always)]
 fn unit1(slot: Option<SlotSampler>, k: u32) -> f32 {
-    slot.map_or(0.0, |s| s.light1(k))
+    match slot {
+        Some(s) => s.light1(k),
+        None => 0.0,
+    }
 }
 
 /// Sample `k` of an area light's slot, 2D.
+#[inline(always)]
 fn unit2(slot: Option<SlotSampler>, k: u32) -> Vec2 {
-    slot.map_or(Vec2::ZERO, |s| s.light2(k))
+    match slot {
+        Some(s) => s.light2(k),
+        None => Vec2::ZERO,
+    }
 }
 
 /// Gathers every light entity into the [`Lights`] table.

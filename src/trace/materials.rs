@@ -47,6 +47,8 @@ pub struct Materials {
 
 impl Materials {
     /// The diffuse colour at a hit: the texture sample when there is one, else `kd`.
+    // Inlined into shading, where it was a call through the GOT per hit.
+    #[inline]
     pub fn kd_at(&self, material: u32, uv: Vec2) -> Vec3 {
         let m = &self.list[material as usize];
         match m.texture.and_then(|t| self.textures.get(t as usize)) {

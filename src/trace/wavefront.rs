@@ -20,7 +20,7 @@ use super::surface::{SHADOW_EPSILON, Surface, offset_ray_origin, surface_at};
 use crate::accel::Ray;
 use crate::sampling::{Sampler, pixel_mode, pixel_sample_offset, samples_taken};
 use crate::scene::{Camera, PixelSampling, Settings};
-use crate::shade::{Shading, ShadingInput};
+use crate::shade::{Model, Shading, ShadingInput, WithModel};
 use crate::stats::{RenderStats, Stage};
 use crate::trace::geometry::SceneGeometry;
 
@@ -305,8 +305,9 @@ impl ShadowOrigin {
 /// Direct light at ray `i`'s hit (or the background on a miss); its shadow rays are
 /// appended to `shadows`. `seen(sample, contribution, index in shadows)` observes every
 /// light sample (a no-op in a render, the trace log in a debug run).
-fn shade_ray(
+fn shade_ray<M: Model>(
     cx: &ShadeContext,
+    model: M,
     i: usize,
     q: &QueuedRay,
     hit: &Option<Surface>,
@@ -334,7 +335,7 @@ fn shade_ray(
             let Some(l) = (ls.position - surface.p).try_normalize() else {
                 return;
             };
-            let c = cx.shading.shade(&ShadingInput {
+            let c = model.shade(&ShadingInput {
                 n: surface.n,
                 l,
                 v,
@@ -367,8 +368,9 @@ fn shade_ray(
 /// `shadow_rays`, both in queue order; returns what `O` observed. Both are the last
 /// depth's buffers, refilled so that their allocations are reused. Chunks, not rays, own
 /// the shadow-ray vectors: no allocation per ray, and a deterministic queue.
-fn shade_chunks<O: LightObserver>(
+fn shade_chunks<O: LightObserver, M: Model>(
     cx: &ShadeContext,
+    model: M,
     rays: &[QueuedRay],
     hits: &[Option<Surface>],
     radiance: &mut Vec<Vec3>,
@@ -387,7 +389,7 @@ fn shade_chunks<O: LightObserver>(
             let mut observer = O::default();
             for (k, ((q, hit), r)) in rays.iter().zip(hits).zip(out).enumerate() {
                 let i = c * CHUNK + k;
-                *r = shade_ray(cx, i, q, hit, shadows, |ls, c, shadow| {
+                *r = shade_ray(cx, model, i, q, hit, shadows, |ls, c, shadow| {
                     observer.seen(i as u32, ls, c, shadow)
                 });
             }
@@ -402,6 +404,29 @@ fn shade_chunks<O: LightObserver>(
         before += s.len();
     }
     observed
+}
+
+/// [`shade_chunks`] of a render (nothing observed), run with the settings' [`Model`].
+struct ShadeRun<'a> {
+    cx: &'a ShadeContext<'a>,
+    rays: &'a [QueuedRay],
+    hits: &'a [Option<Surface>],
+    radiance: &'a mut Vec<Vec3>,
+    shadows: &'a mut ShadowQueue,
+}
+
+impl WithModel for ShadeRun<'_> {
+    type Output = ();
+    fn run<M: Model>(self, model: M) {
+        shade_chunks::<(), M>(
+            self.cx,
+            model,
+            self.rays,
+            self.hits,
+            self.radiance,
+            self.shadows,
+        );
+    }
 }
 
 /// Shades every hit: direct light from every light sample, either added at once
@@ -438,9 +463,18 @@ pub fn shade_hits(
     let (rays, hits) = (&wf.rays, &wf.hits);
     let (radiance, shadows) = (&mut wf.ray_radiance, &mut wf.shadow_rays);
     match log {
-        None => shade_chunks::<()>(&cx, rays, hits, radiance, shadows),
+        // The render's loop has a copy for Lambertian without per-sample branches on the
+        // settings (see `Shading::dispatch`).
+        None => cx.shading.dispatch(ShadeRun {
+            cx: &cx,
+            rays,
+            hits,
+            radiance,
+            shadows,
+        }),
+        // The debug's reads the model per sample (one copy of the loop).
         Some(mut log) => {
-            log.light_samples = shade_chunks(&cx, rays, hits, radiance, shadows);
+            log.light_samples = shade_chunks(&cx, cx.shading, rays, hits, radiance, shadows);
         }
     }
     stats.record(
@@ -459,17 +493,22 @@ pub fn trace_shadow_rays(
     mut stats: ResMut<RenderStats>,
 ) {
     let t_max = 1.0 - SHADOW_EPSILON;
-    let transparent = plan.transparent_shadows;
     let wf = &mut *wf;
-    wf.shadow_rays.trace(&mut wf.ray_radiance, |s| {
-        if transparent {
+    // One closure per mode, chosen once: with the transmittance walk (and its crossings
+    // buffer) in the same closure, every binary shadow ray paid its 6 KB stack frame.
+    if plan.transparent_shadows {
+        wf.shadow_rays.trace(&mut wf.ray_radiance, |s| {
             s.contribution * geometry.transmittance(&s.ray, t_max, &materials, &mut ())
-        } else if geometry.occluded(&s.ray, t_max, &mut ()) {
-            Vec3::ZERO
-        } else {
-            s.contribution
-        }
-    });
+        });
+    } else {
+        wf.shadow_rays.trace(&mut wf.ray_radiance, |s| {
+            if geometry.occluded(&s.ray, t_max, &mut ()) {
+                Vec3::ZERO
+            } else {
+                s.contribution
+            }
+        });
+    }
     let n = wf.shadow_rays.len() as u64;
     stats.record(Stage::TraceShadowRays, n);
     stats.rays.shadow += n;
