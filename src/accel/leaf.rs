@@ -10,12 +10,14 @@
 //! edge function, where the scalar test falls back to f64) pass. Every lane that passes
 //! is confirmed by the scalar test on that lane's vertices, so a leaf's answer is the
 //! scalar test's, bit for bit, by construction.
+//!
+//! [`intersect_triangle_sheared`]: super::intersect_triangle_sheared
 
 use glam::Vec3;
 use wide::u32x4;
 
 use super::Ray;
-use super::triangle::{RayShear, TriangleHit, intersect_triangle_sheared, is_degenerate};
+use super::triangle::{RayShear, TriangleHit, intersect_triangle_flagged, is_degenerate};
 
 /// Triangles per group. Four beat eight on the 100k torus: the binned-SAH leaves
 /// hold 3.3 triangles on average (at most 4 there), so eight lanes would mostly pad.
@@ -73,9 +75,25 @@ pub fn groups_for(count: usize) -> usize {
     count.div_ceil(LANES)
 }
 
-/// The `(child, count)` of a wide node's leaf lane: its first group and its triangle count.
-pub fn leaf_lane(first_group: usize, count: u32) -> (u32, u32) {
-    (first_group as u32, count)
+/// Bit of a leaf lane's `count` ([`leaf_lane`]) set when one of the leaf's triangles is
+/// degenerate ([`is_degenerate`]: exactly collinear vertices). Decided once, when the
+/// leaf is grouped, so that a query repeats that exact f64 test only in such leaves,
+/// not on every lane it may hit (no memory per triangle: counts are far below 2^31).
+pub const DEGENERATE: u32 = 1 << 31;
+
+/// The `(child, count)` of a wide node's leaf lane: its first group and its triangle
+/// count, with [`DEGENERATE`] set when one of its triangles is.
+pub fn leaf_lane(first_group: usize, count: u32, degenerate: bool) -> (u32, u32) {
+    assert!(count < DEGENERATE, "a leaf of {count} triangles");
+    let flag = if degenerate { DEGENERATE } else { 0 };
+    (first_group as u32, count | flag)
+}
+
+/// A leaf lane's `count` ([`leaf_lane`]) read back: its triangle count, and whether one
+/// of its triangles may be degenerate.
+#[inline(always)]
+pub fn leaf_count(count: u32) -> (usize, bool) {
+    ((count & !DEGENERATE) as usize, count & DEGENERATE != 0)
 }
 
 /// Mask of the lanes holding triangles in group `i` of a leaf of `count` triangles.
@@ -108,17 +126,20 @@ impl LeafTris {
         prims: &[u32],
         positions: &[[Vec3; 3]],
     ) -> (u32, u32) {
-        let lane = leaf_lane(self.groups.len(), count);
+        let first_group = self.groups.len();
         let (slot, end) = (slot as usize, (slot + count) as usize);
+        let mut degenerate = false;
         for start in (slot..end).step_by(LANES) {
             let mut group = TriGroup::PADDING;
             for k in start..(start + LANES).min(end) {
-                group.set_triangle(k - start, positions[prims[k] as usize]);
+                let tri @ [a, b, c] = positions[prims[k] as usize];
+                degenerate |= is_degenerate(a, b, c);
+                group.set_triangle(k - start, tri);
             }
             self.groups.push(group);
             self.first.push(start as u32);
         }
-        lane
+        leaf_lane(first_group, count, degenerate)
     }
 
     /// Bytes held.
@@ -126,17 +147,20 @@ impl LeafTris {
         size_of_val(self.groups.as_slice()) + size_of_val(self.first.as_slice())
     }
 
-    /// Checks the leaf of `count` triangles at group `first_group` against `positions`
-    /// and `prims`: its groups exist and were not used by another leaf, lane `j` of
-    /// group `i` holds slot `first + i * LANES + j`, padding lanes are NaN. Marks the
-    /// groups used and calls `slot(k, triangle)` for each triangle slot `k`.
+    /// Checks the leaf at group `first_group` with the lane count `count` ([`leaf_lane`])
+    /// against `positions` and `prims`: its groups exist and were not used by another
+    /// leaf, lane `j` of group `i` holds slot `first + i * LANES + j`, padding lanes are
+    /// NaN, [`DEGENERATE`] is set exactly when one of its triangles is degenerate. Marks
+    /// the groups used and calls `slot(k, triangle)` for each triangle slot `k`.
     pub fn validate_leaf(
         &self,
         first_group: usize,
-        count: usize,
+        count: u32,
         used: &mut [bool],
         mut slot: impl FnMut(usize, [Vec3; 3]) -> Result<(), String>,
     ) -> Result<(), String> {
+        let (count, flagged) = leaf_count(count);
+        let mut degenerate = false;
         let groups = first_group..first_group + groups_for(count);
         if groups.end > self.groups.len() || self.first.len() != self.groups.len() {
             return Err(format!("leaf at group {first_group}: past the end"));
@@ -160,8 +184,15 @@ impl LeafTris {
                     }
                     continue;
                 }
-                slot(first + i * LANES + lane, self.groups[g].triangle(lane))?;
+                let tri @ [a, b, c] = self.groups[g].triangle(lane);
+                degenerate |= is_degenerate(a, b, c);
+                slot(first + i * LANES + lane, tri)?;
             }
+        }
+        if degenerate != flagged {
+            return Err(format!(
+                "leaf at group {first_group}: degenerate flag {flagged}, triangles {degenerate}"
+            ));
         }
         Ok(())
     }
@@ -192,7 +223,7 @@ impl RayLeaf {
     }
 
     /// The prefilter of group `g` with bound `t_max`: the lanes the scalar test may
-    /// accept (bit `lane` is clear only when [`intersect_triangle_sheared`] rejects that
+    /// accept (bit `lane` is clear only when the scalar test rejects that
     /// lane before its division) and the values that decide most of them without it.
     /// The same operations in the same order: `(p - origin)[k]` is `p[k] - origin[k]`;
     /// Rust never fuses a product and a sum. No branches, so the loop vectorises.
@@ -245,7 +276,7 @@ impl RayLeaf {
         }
     }
 
-    /// Lane `lane` of `g` in ray space, as [`intersect_triangle_sheared`] computes it.
+    /// Lane `lane` of `g` in ray space, as the scalar test computes it.
     #[inline(always)]
     fn shear(&self, g: &TriGroup, lane: usize) -> Sheared {
         let [kx, ky, kz] = self.axes;
@@ -309,24 +340,30 @@ pub struct Candidates {
 }
 
 impl Candidates {
-    /// [`intersect_triangle_sheared`] on lane `lane` (in `mask`) of the group, whose
-    /// triangle is `tri` (`g.triangle(lane)`), with a bound `t_max` at most the prefilter's. From the lane's
-    /// values when they decide it: no zero edge function (so the signs, det and the
-    /// sign of t_scaled passed as in the scalar test) and a t far enough from 0 that the
-    /// scalar test's error bound on t cannot send it to its f64 recheck (see
-    /// `clear_of_zero`); else the scalar test itself.
+    /// The scalar test, [`super::intersect_triangle_sheared`], on lane `lane` (in
+    /// `mask`) of group `g`, with a bound `t_max` at most the prefilter's;
+    /// `may_be_degenerate` false vouches that the lane's triangle is not degenerate
+    /// ([`DEGENERATE`]). From the lane's values when they decide it: no zero edge
+    /// function (so the signs, det and the sign of t_scaled passed as in the scalar
+    /// test) and a t far enough from 0 that the scalar test's error bound on t cannot
+    /// send it to its f64 recheck (see `clear_of_zero`); else the scalar test itself.
     #[inline(always)]
     pub fn hit(
         &self,
         lane: usize,
-        tri: [Vec3; 3],
+        g: &TriGroup,
+        may_be_degenerate: bool,
         shear: &RayShear,
         origin: Vec3,
         t_max: f32,
     ) -> Option<TriangleHit> {
-        let [a, b, c] = tri;
+        // The vertices are read only where they are needed: the scalar test, and the
+        // exact degenerate test in leaves that hold a degenerate triangle.
+        let scalar = || {
+            intersect_triangle_flagged(shear, origin, g.triangle(lane), t_max, may_be_degenerate)
+        };
         if self.zero & (1 << lane) != 0 {
-            return intersect_triangle_sheared(shear, origin, a, b, c, t_max);
+            return scalar();
         }
         let (det, t_scaled) = (self.det[lane], self.t_scaled[lane]);
         // The scalar test's remaining checks, in its order, against the current bound.
@@ -335,8 +372,14 @@ impl Candidates {
         } else {
             t_scaled >= t_max * det
         };
-        if beyond || is_degenerate(a, b, c) {
+        if beyond {
             return None;
+        }
+        if may_be_degenerate {
+            let [a, b, c] = g.triangle(lane);
+            if is_degenerate(a, b, c) {
+                return None;
+            }
         }
         let inv_det = 1.0 / det;
         let t = t_scaled * inv_det;
@@ -344,7 +387,7 @@ impl Candidates {
             return None;
         }
         if !clear_of_zero(t, det, self.sizes.map(|s| s[lane])) {
-            return intersect_triangle_sheared(shear, origin, a, b, c, t_max);
+            return scalar();
         }
         let [u, v, w] = self.e.map(|e| e[lane]);
         Some(TriangleHit {

@@ -1,20 +1,24 @@
 //! Tests of the leaf prefilter and its decided lanes against the scalar triangle test.
 
 use super::*;
-use crate::accel::triangle::t_and_error;
+use crate::accel::triangle::{intersect_triangle_sheared, t_and_error};
 use crate::test_util::Lcg;
 use glam::vec3;
 
 /// Each lane's hit as the wide BVH's leaves compute it: prefilter, then each lane
-/// that passes decided from its values or by the scalar test. Also returns the
-/// prefilter's mask.
+/// that passes decided from its values or by the scalar test, with the group's
+/// degenerate flag as a leaf of it would carry it. Also returns the prefilter's mask.
 fn leaf_hits(ray: &Ray, g: &TriGroup, t_max: f32) -> ([Option<TriangleHit>; LANES], u32) {
     let s = RayShear::new(ray);
     let candidates = RayLeaf::new(ray, &s).candidates(g, t_max);
     let mask = candidates.mask;
+    let degenerate = (0..LANES).any(|lane| {
+        let [a, b, c] = g.triangle(lane);
+        is_degenerate(a, b, c)
+    });
     let hits = std::array::from_fn(|lane| {
         (mask & (1 << lane) != 0)
-            .then(|| candidates.hit(lane, g.triangle(lane), &s, ray.origin, t_max))
+            .then(|| candidates.hit(lane, g, degenerate, &s, ray.origin, t_max))
             .flatten()
     });
     (hits, mask)

@@ -15,7 +15,7 @@
 //! same t is met first.
 
 use super::bvh::{Bvh, MAX_DEPTH};
-use super::leaf::{LANES, LeafTris, groups_for};
+use super::leaf::{LANES, LeafTris, groups_for, leaf_count};
 use super::wide_node::{EMPTY, RayBoxes, collapse_node, leaf_lanes};
 pub use super::wide_node::{WIDTH, WideNode};
 use super::wide_query::LeafVisitor;
@@ -123,7 +123,7 @@ impl WideBvh {
         let mut lanes = vec![0; self.prims.len()];
         for node in &self.nodes {
             for lane in 0..WIDTH {
-                let (group, count) = (node.child[lane] as usize, node.count[lane] as usize);
+                let (group, (count, _)) = (node.child[lane] as usize, leaf_count(node.count[lane]));
                 for i in 0..count {
                     let slot = self.leaves.first[group] as usize + i;
                     lanes[self.prims[slot] as usize] = (group * LANES + i) as u32;
@@ -180,7 +180,7 @@ impl WideBvh {
                     let lane = leaves.trailing_zeros() as usize;
                     leaves &= leaves - 1;
                     let (child, count) = (node.child[lane], node.count[lane]);
-                    if visitor.leaf(child as usize, count as usize, t_max) {
+                    if visitor.leaf(child as usize, count, t_max) {
                         return true;
                     }
                 }
@@ -250,9 +250,7 @@ impl WideBvh {
                 leaves &= !(1 << lane);
                 let lane = lane as usize;
                 let (child, count) = (node.child[lane], node.count[lane]);
-                if t[lane] <= *t_max * BOX_MARGIN
-                    && visitor.leaf(child as usize, count as usize, t_max)
-                {
+                if t[lane] <= *t_max * BOX_MARGIN && visitor.leaf(child as usize, count, t_max) {
                     return true;
                 }
             }
@@ -337,7 +335,7 @@ impl WideBvh {
                     Ok(())
                 };
                 self.leaves
-                    .validate_leaf(child as usize, count as usize, &mut used, leaf)
+                    .validate_leaf(child as usize, count, &mut used, leaf)
                     .map_err(|e| format!("node {i} lane {lane}: {e}"))?;
             }
         }
