@@ -264,7 +264,7 @@ impl RayLeaf {
             [e[0][lane], e[1][lane], e[2][lane]] = [u, v, w];
             dets[lane] = det;
             t_scaleds[lane] = t_scaled;
-            [sizes[0][lane], sizes[1][lane], sizes[2][lane]] = sheared.sizes();
+            [sizes[0][lane], sizes[1][lane], sizes[2][lane]] = sheared.sizes(self.sz.abs());
         }
         Candidates {
             mask: u32x4::from(bits).to_bitmask(),
@@ -287,7 +287,7 @@ impl RayLeaf {
         let (b_x, b_y, b_z) = (b[kx][lane] - ox, b[ky][lane] - oy, b[kz][lane] - oz);
         let (c_x, c_y, c_z) = (c[kx][lane] - ox, c[ky][lane] - oy, c[kz][lane] - oz);
         Sheared {
-            rel: [a_x, a_y, a_z, b_x, b_y, b_z, c_x, c_y, c_z],
+            rel_z: [a_z, b_z, c_z],
             xy: [
                 a_x - sx * a_z,
                 a_y - sy * a_z,
@@ -301,26 +301,26 @@ impl RayLeaf {
     }
 }
 
-/// A triangle in ray space: vertices relative to the origin (permuted axes), their
-/// sheared x and y, their scaled z.
+/// A triangle in ray space: the z coordinates of its vertices relative to the origin
+/// (permuted axes), their sheared x and y, their scaled z.
 struct Sheared {
-    rel: [f32; 9],
+    rel_z: [f32; 3],
     xy: [f32; 6],
     z: [f32; 3],
 }
 
 impl Sheared {
-    /// The largest magnitude of `rel`, of `xy` and of `z`: what the scalar test's
-    /// error bound on t grows with. A NaN coordinate makes t NaN, so it may be skipped.
+    /// Pz, S, Z: the largest magnitude of `rel_z`, of `xy` and of `z` (with `abs_sz` the
+    /// ray's |sz|), from which [`t_error_bound`] bounds what the scalar test's error
+    /// bound on t grows with. Z is |sz| Pz: rounding is monotonic, so that product is
+    /// the largest of the rounded |sz z|, without their own abs and max. A NaN
+    /// coordinate makes t NaN, so it may be skipped.
     #[inline(always)]
-    fn sizes(&self) -> [f32; 3] {
+    fn sizes(&self, abs_sz: f32) -> [f32; 3] {
         // maxps itself: f32::max would add a NaN check per lane.
         let max = |m: f32, x: &f32| if m > x.abs() { m } else { x.abs() };
-        [
-            self.rel.iter().fold(0.0, max),
-            self.xy.iter().fold(0.0, max),
-            self.z.iter().fold(0.0, max),
-        ]
+        let pz = self.rel_z.iter().fold(0.0, max);
+        [pz, self.xy.iter().fold(0.0, max), abs_sz * pz]
     }
 }
 
@@ -401,8 +401,11 @@ impl Candidates {
 
 /// True when `t` exceeds three times the scalar test's bound on its rounding error
 /// (`triangle::t_error`), so that the test keeps t without its f64 recheck. `sizes`
-/// are P, S, Z: the largest magnitude of the relative vertex coordinates, of their
-/// sheared x and y, and of the scaled z. With the edge functions all of one sign
+/// are Pz, S, Z ([`Sheared::sizes`]): the largest magnitude of the relative vertex
+/// z coordinates, of their sheared x and y, and of the scaled z. The largest relative
+/// coordinate P is then at most (S + Pz) (1 + u): a relative x is its sheared x (at
+/// most S (1 + u) before rounding) plus sx times its z, rounded (at most Pz, as
+/// |sx| <= 1); the same for y. With the edge functions all of one sign
 /// (|u| + |v| + |w| <= |det| (1 + 3u)) and |sx|, |sy| <= 1, each term of that bound is
 /// at most: the errors of the sheared coordinates 2 gamma(5) P; of the edge functions
 /// together 24 gamma(5) P S + 6 gamma(2) S^2 =: E; of det E + gamma(2) |det|, of
@@ -418,9 +421,11 @@ fn clear_of_zero(t: f32, det: f32, sizes: [f32; 3]) -> bool {
 /// The bound of [`clear_of_zero`] on the scalar test's bound on t's rounding error.
 #[inline(always)]
 fn t_error_bound(t: f32, det: f32, sizes: [f32; 3]) -> f64 {
-    let [p, s, z] = sizes.map(f64::from);
+    let [pz, s, z] = sizes.map(f64::from);
     let (t, det) = (f64::from(t).abs(), f64::from(det).abs());
     let unit = f64::from(f32::EPSILON) * 0.5;
+    // (S + Pz) (1 + u), with a margin for the rounding of this sum and product.
+    let p = (s + pz) * (1.0 + 2.0 * unit);
     unit * ((120.0 * p * s + 12.0 * s * s) * (z + t) / det + 6.0 * z + 2.0 * t)
 }
 

@@ -178,7 +178,10 @@ fn decided_lanes_bound_the_scalar_tests_t_error() {
         let far = [0.0, 10.0, 1e4][i % 3];
         let centre = rng.vec() * 4.0 + Vec3::splat(far);
         let thin = if i % 5 == 0 { 1e-3 } else { 1.0 };
-        let (e1, e2) = (rng.dir() * 4.0, rng.dir() * thin);
+        // Some long ones: vertices far to the side of the ray, whose relative x or y
+        // exceeds every relative z many times.
+        let long = if i % 7 == 0 { 1e3 } else { 4.0 };
+        let (e1, e2) = (rng.dir() * long, rng.dir() * thin);
         let tri = [centre, centre + e1, centre + e2];
         let target = centre + e1 * rng.next_f32() * 0.5 + e2 * rng.next_f32() * 0.5;
         let ray = if i % 2 == 0 {
