@@ -249,16 +249,23 @@ impl RayLeaf {
             let v = ax * cy - ay * cx;
             let w = bx * ay - by * ax;
             let zero = (u == 0.0) | (v == 0.0) | (w == 0.0);
-            let mixed = ((u < 0.0) | (v < 0.0) | (w < 0.0)) & ((u > 0.0) | (v > 0.0) | (w > 0.0));
+            // Where no edge function is zero (the others pass anyway), the scalar test's
+            // sign test is on their sign bits: mixed when two differ. A NaN one may land
+            // either way: the scalar test rejects it (its t is NaN). Of one sign, their
+            // sum det is not zero and has that sign too, so the scalar test's det == 0
+            // never rejects what passes here.
+            let (ub, vb, wb) = (u.to_bits(), v.to_bits(), w.to_bits());
+            let mixed = (((ub ^ vb) | (ub ^ wb)) as i32) < 0;
             let det = u + v + w;
             let t_scaled = u * z[0] + v * z[1] + w * z[2];
-            let bound = t_max * det;
-            let outside = if det < 0.0 {
-                (t_scaled >= 0.0) | (t_scaled <= bound)
-            } else {
-                (t_scaled <= 0.0) | (t_scaled >= bound)
-            };
-            let keep = zero | !(mixed | (det == 0.0) | outside);
+            // The scaled t bound test with both sides times the sign of det (exact):
+            // t_scaled >= 0 or <= t_max det for a negative det, <= 0 or >= t_max det
+            // for a positive one.
+            let sign = det.to_bits() & 0x8000_0000;
+            let signed_t = f32::from_bits(t_scaled.to_bits() ^ sign);
+            let bound = f32::from_bits((t_max * det).to_bits() ^ sign);
+            let outside = (signed_t <= 0.0) | (signed_t >= bound);
+            let keep = zero | !(mixed | outside);
             bits[lane] = (keep as u32).wrapping_neg();
             zeros[lane] = (zero as u32).wrapping_neg();
             [e[0][lane], e[1][lane], e[2][lane]] = [u, v, w];
