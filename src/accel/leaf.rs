@@ -1,6 +1,6 @@
 //! The wide BVH's leaf triangles, structure-of-arrays in groups of [`LANES`]: each
-//! leaf fills whole groups (the last one padded with NaN lanes, masked by the leaf's
-//! count), so that one pass of plain lane loops, which the compiler vectorises,
+//! leaf fills whole groups (the last one padded with NaN lanes, which the prefilter
+//! rejects), so that one pass of plain lane loops, which the compiler vectorises,
 //! tests all of a leaf's triangles at once.
 //!
 //! That pass is a conservative prefilter: it runs the early-outs of
@@ -264,8 +264,9 @@ impl RayLeaf {
             let sign = det.to_bits() & 0x8000_0000;
             let signed_t = f32::from_bits(t_scaled.to_bits() ^ sign);
             let bound = f32::from_bits((t_max * det).to_bits() ^ sign);
-            let outside = (signed_t <= 0.0) | (signed_t >= bound);
-            let keep = zero | !(mixed | outside);
+            // Inside, not "not outside": a NaN t_scaled, as in padding lanes, fails it.
+            let inside = (signed_t > 0.0) & (signed_t < bound);
+            let keep = zero | (!mixed & inside);
             bits[lane] = (keep as u32).wrapping_neg();
             zeros[lane] = (zero as u32).wrapping_neg();
             [e[0][lane], e[1][lane], e[2][lane]] = [u, v, w];

@@ -226,3 +226,23 @@ fn lane_masks_cover_a_leaf_exactly() {
     }
     assert_eq!(lane_mask(1, 5), 1);
 }
+
+#[test]
+fn padding_lanes_never_pass_the_prefilter() {
+    // The leaf test does not mask a group by its leaf's count: the prefilter itself
+    // must reject the NaN padding lanes, whatever the ray and bound.
+    let mut rng = Lcg(5);
+    let mut g = TriGroup::PADDING;
+    g.set_triangle(0, [Vec3::ZERO, Vec3::X, Vec3::Y]);
+    for i in 0..2000 {
+        let mut d = rng.dir();
+        if i % 5 == 0 {
+            d[i % 3] = 0.0;
+        }
+        let ray = Ray::new(rng.vec() * 4.0 - Vec3::splat(2.0), d);
+        for t_max in [f32::INFINITY, 1.0, 0.0, -1.0, f32::NAN] {
+            let (_, mask) = leaf_hits(&ray, &g, t_max);
+            assert_eq!(mask & !1, 0, "{ray:?} {t_max}");
+        }
+    }
+}

@@ -9,7 +9,7 @@
 
 use multiversion::multiversion;
 
-use super::leaf::{LANES, RayLeaf, groups_for, lane_mask, leaf_count};
+use super::leaf::{LANES, RayLeaf, groups_for, leaf_count};
 use super::triangle::{RayShear, TriangleHit, intersect_triangle_flagged};
 use super::{Ray, WideBvh};
 
@@ -52,7 +52,8 @@ impl RayLeaves<'_> {
             // The bound only falls within the group, so the group's first bound lets
             // through every lane a later, lower one accepts.
             let candidates = self.pre.candidates(g, *bound);
-            let mut lanes = candidates.mask & lane_mask(i, count);
+            // Padding lanes (NaN) never pass the prefilter: no mask by the count.
+            let mut lanes = candidates.mask;
             while lanes != 0 {
                 let lane = lanes.trailing_zeros() as usize;
                 lanes &= lanes - 1;
