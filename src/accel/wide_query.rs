@@ -162,9 +162,9 @@ impl WideBvh {
         &self,
         ray: &Ray,
         t_max: f32,
-        visit: impl FnMut(u32, &TriangleHit) -> bool,
+        mut visit: impl FnMut(u32, &TriangleHit) -> bool,
     ) -> bool {
-        any_hit_dispatched(self, ray, t_max, visit)
+        any_hit_dispatched(self, ray, t_max, &mut visit)
     }
 
     /// [`Self::any_hit`] compiled for whatever target features the caller has.
@@ -216,11 +216,11 @@ fn closest_hit_dispatched(
 
 /// [`WideBvh::any_hit`] for the best instruction set the CPU has.
 #[multiversion(targets("x86_64+avx2+fma", "x86_64+sse4.2"))]
-fn any_hit_dispatched<F: FnMut(u32, &TriangleHit) -> bool>(
+fn any_hit_dispatched(
     wide: &WideBvh,
     ray: &Ray,
     t_max: f32,
-    visit: F,
+    visit: &mut dyn FnMut(u32, &TriangleHit) -> bool,
 ) -> bool {
     wide.any_hit_inlined(ray, t_max, visit)
 }
