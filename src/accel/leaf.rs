@@ -1,6 +1,6 @@
 //! The wide BVH's leaf triangles, structure-of-arrays in groups of [`LANES`]: each
-//! leaf fills whole groups (the last one padded with NaN lanes, masked by the leaf's
-//! count), so that one pass of plain lane loops, which the compiler vectorises,
+//! leaf fills whole groups (the last one padded with NaN lanes, which the prefilter
+//! rejects), so that one pass of plain lane loops, which the compiler vectorises,
 //! tests all of a leaf's triangles at once.
 //!
 //! That pass is a conservative prefilter: it runs the early-outs of
@@ -10,12 +10,14 @@
 //! edge function, where the scalar test falls back to f64) pass. Every lane that passes
 //! is confirmed by the scalar test on that lane's vertices, so a leaf's answer is the
 //! scalar test's, bit for bit, by construction.
+//!
+//! [`intersect_triangle_sheared`]: super::intersect_triangle_sheared
 
 use glam::Vec3;
 use wide::u32x4;
 
 use super::Ray;
-use super::triangle::{RayShear, TriangleHit, intersect_triangle_sheared, is_degenerate};
+use super::triangle::{RayShear, TriangleHit, intersect_triangle_flagged, is_degenerate};
 
 /// Triangles per group. Four beat eight on the 100k torus: the binned-SAH leaves
 /// hold 3.3 triangles on average (at most 4 there), so eight lanes would mostly pad.
@@ -73,9 +75,25 @@ pub fn groups_for(count: usize) -> usize {
     count.div_ceil(LANES)
 }
 
-/// The `(child, count)` of a wide node's leaf lane: its first group and its triangle count.
-pub fn leaf_lane(first_group: usize, count: u32) -> (u32, u32) {
-    (first_group as u32, count)
+/// Bit of a leaf lane's `count` ([`leaf_lane`]) set when one of the leaf's triangles is
+/// degenerate ([`is_degenerate`]: exactly collinear vertices). Decided once, when the
+/// leaf is grouped, so that a query repeats that exact f64 test only in such leaves,
+/// not on every lane it may hit (no memory per triangle: counts are far below 2^31).
+pub const DEGENERATE: u32 = 1 << 31;
+
+/// The `(child, count)` of a wide node's leaf lane: its first group and its triangle
+/// count, with [`DEGENERATE`] set when one of its triangles is.
+pub fn leaf_lane(first_group: usize, count: u32, degenerate: bool) -> (u32, u32) {
+    assert!(count < DEGENERATE, "a leaf of {count} triangles");
+    let flag = if degenerate { DEGENERATE } else { 0 };
+    (first_group as u32, count | flag)
+}
+
+/// A leaf lane's `count` ([`leaf_lane`]) read back: its triangle count, and whether one
+/// of its triangles may be degenerate.
+#[inline(always)]
+pub fn leaf_count(count: u32) -> (usize, bool) {
+    ((count & !DEGENERATE) as usize, count & DEGENERATE != 0)
 }
 
 /// Mask of the lanes holding triangles in group `i` of a leaf of `count` triangles.
@@ -108,17 +126,20 @@ impl LeafTris {
         prims: &[u32],
         positions: &[[Vec3; 3]],
     ) -> (u32, u32) {
-        let lane = leaf_lane(self.groups.len(), count);
+        let first_group = self.groups.len();
         let (slot, end) = (slot as usize, (slot + count) as usize);
+        let mut degenerate = false;
         for start in (slot..end).step_by(LANES) {
             let mut group = TriGroup::PADDING;
             for k in start..(start + LANES).min(end) {
-                group.set_triangle(k - start, positions[prims[k] as usize]);
+                let tri @ [a, b, c] = positions[prims[k] as usize];
+                degenerate |= is_degenerate(a, b, c);
+                group.set_triangle(k - start, tri);
             }
             self.groups.push(group);
             self.first.push(start as u32);
         }
-        lane
+        leaf_lane(first_group, count, degenerate)
     }
 
     /// Bytes held.
@@ -126,17 +147,20 @@ impl LeafTris {
         size_of_val(self.groups.as_slice()) + size_of_val(self.first.as_slice())
     }
 
-    /// Checks the leaf of `count` triangles at group `first_group` against `positions`
-    /// and `prims`: its groups exist and were not used by another leaf, lane `j` of
-    /// group `i` holds slot `first + i * LANES + j`, padding lanes are NaN. Marks the
-    /// groups used and calls `slot(k, triangle)` for each triangle slot `k`.
+    /// Checks the leaf at group `first_group` with the lane count `count` ([`leaf_lane`])
+    /// against `positions` and `prims`: its groups exist and were not used by another
+    /// leaf, lane `j` of group `i` holds slot `first + i * LANES + j`, padding lanes are
+    /// NaN, [`DEGENERATE`] is set exactly when one of its triangles is degenerate. Marks
+    /// the groups used and calls `slot(k, triangle)` for each triangle slot `k`.
     pub fn validate_leaf(
         &self,
         first_group: usize,
-        count: usize,
+        count: u32,
         used: &mut [bool],
         mut slot: impl FnMut(usize, [Vec3; 3]) -> Result<(), String>,
     ) -> Result<(), String> {
+        let (count, flagged) = leaf_count(count);
+        let mut degenerate = false;
         let groups = first_group..first_group + groups_for(count);
         if groups.end > self.groups.len() || self.first.len() != self.groups.len() {
             return Err(format!("leaf at group {first_group}: past the end"));
@@ -160,8 +184,15 @@ impl LeafTris {
                     }
                     continue;
                 }
-                slot(first + i * LANES + lane, self.groups[g].triangle(lane))?;
+                let tri @ [a, b, c] = self.groups[g].triangle(lane);
+                degenerate |= is_degenerate(a, b, c);
+                slot(first + i * LANES + lane, tri)?;
             }
+        }
+        if degenerate != flagged {
+            return Err(format!(
+                "leaf at group {first_group}: degenerate flag {flagged}, triangles {degenerate}"
+            ));
         }
         Ok(())
     }
@@ -192,7 +223,7 @@ impl RayLeaf {
     }
 
     /// The prefilter of group `g` with bound `t_max`: the lanes the scalar test may
-    /// accept (bit `lane` is clear only when [`intersect_triangle_sheared`] rejects that
+    /// accept (bit `lane` is clear only when the scalar test rejects that
     /// lane before its division) and the values that decide most of them without it.
     /// The same operations in the same order: `(p - origin)[k]` is `p[k] - origin[k]`;
     /// Rust never fuses a product and a sum. No branches, so the loop vectorises.
@@ -218,22 +249,30 @@ impl RayLeaf {
             let v = ax * cy - ay * cx;
             let w = bx * ay - by * ax;
             let zero = (u == 0.0) | (v == 0.0) | (w == 0.0);
-            let mixed = ((u < 0.0) | (v < 0.0) | (w < 0.0)) & ((u > 0.0) | (v > 0.0) | (w > 0.0));
+            // Where no edge function is zero (the others pass anyway), the scalar test's
+            // sign test is on their sign bits: mixed when two differ. A NaN one may land
+            // either way: the scalar test rejects it (its t is NaN). Of one sign, their
+            // sum det is not zero and has that sign too, so the scalar test's det == 0
+            // never rejects what passes here.
+            let (ub, vb, wb) = (u.to_bits(), v.to_bits(), w.to_bits());
+            let mixed = (((ub ^ vb) | (ub ^ wb)) as i32) < 0;
             let det = u + v + w;
             let t_scaled = u * z[0] + v * z[1] + w * z[2];
-            let bound = t_max * det;
-            let outside = if det < 0.0 {
-                (t_scaled >= 0.0) | (t_scaled <= bound)
-            } else {
-                (t_scaled <= 0.0) | (t_scaled >= bound)
-            };
-            let keep = zero | !(mixed | (det == 0.0) | outside);
+            // The scaled t bound test with both sides times the sign of det (exact):
+            // t_scaled >= 0 or <= t_max det for a negative det, <= 0 or >= t_max det
+            // for a positive one.
+            let sign = det.to_bits() & 0x8000_0000;
+            let signed_t = f32::from_bits(t_scaled.to_bits() ^ sign);
+            let bound = f32::from_bits((t_max * det).to_bits() ^ sign);
+            // Inside, not "not outside": a NaN t_scaled, as in padding lanes, fails it.
+            let inside = (signed_t > 0.0) & (signed_t < bound);
+            let keep = zero | (!mixed & inside);
             bits[lane] = (keep as u32).wrapping_neg();
             zeros[lane] = (zero as u32).wrapping_neg();
             [e[0][lane], e[1][lane], e[2][lane]] = [u, v, w];
             dets[lane] = det;
             t_scaleds[lane] = t_scaled;
-            [sizes[0][lane], sizes[1][lane], sizes[2][lane]] = sheared.sizes();
+            [sizes[0][lane], sizes[1][lane], sizes[2][lane]] = sheared.sizes(self.sz.abs());
         }
         Candidates {
             mask: u32x4::from(bits).to_bitmask(),
@@ -245,7 +284,7 @@ impl RayLeaf {
         }
     }
 
-    /// Lane `lane` of `g` in ray space, as [`intersect_triangle_sheared`] computes it.
+    /// Lane `lane` of `g` in ray space, as the scalar test computes it.
     #[inline(always)]
     fn shear(&self, g: &TriGroup, lane: usize) -> Sheared {
         let [kx, ky, kz] = self.axes;
@@ -256,7 +295,7 @@ impl RayLeaf {
         let (b_x, b_y, b_z) = (b[kx][lane] - ox, b[ky][lane] - oy, b[kz][lane] - oz);
         let (c_x, c_y, c_z) = (c[kx][lane] - ox, c[ky][lane] - oy, c[kz][lane] - oz);
         Sheared {
-            rel: [a_x, a_y, a_z, b_x, b_y, b_z, c_x, c_y, c_z],
+            rel_z: [a_z, b_z, c_z],
             xy: [
                 a_x - sx * a_z,
                 a_y - sy * a_z,
@@ -270,26 +309,26 @@ impl RayLeaf {
     }
 }
 
-/// A triangle in ray space: vertices relative to the origin (permuted axes), their
-/// sheared x and y, their scaled z.
+/// A triangle in ray space: the z coordinates of its vertices relative to the origin
+/// (permuted axes), their sheared x and y, their scaled z.
 struct Sheared {
-    rel: [f32; 9],
+    rel_z: [f32; 3],
     xy: [f32; 6],
     z: [f32; 3],
 }
 
 impl Sheared {
-    /// The largest magnitude of `rel`, of `xy` and of `z`: what the scalar test's
-    /// error bound on t grows with. A NaN coordinate makes t NaN, so it may be skipped.
+    /// Pz, S, Z: the largest magnitude of `rel_z`, of `xy` and of `z` (with `abs_sz` the
+    /// ray's |sz|), from which [`t_error_bound`] bounds what the scalar test's error
+    /// bound on t grows with. Z is |sz| Pz: rounding is monotonic, so that product is
+    /// the largest of the rounded |sz z|, without their own abs and max. A NaN
+    /// coordinate makes t NaN, so it may be skipped.
     #[inline(always)]
-    fn sizes(&self) -> [f32; 3] {
+    fn sizes(&self, abs_sz: f32) -> [f32; 3] {
         // maxps itself: f32::max would add a NaN check per lane.
         let max = |m: f32, x: &f32| if m > x.abs() { m } else { x.abs() };
-        [
-            self.rel.iter().fold(0.0, max),
-            self.xy.iter().fold(0.0, max),
-            self.z.iter().fold(0.0, max),
-        ]
+        let pz = self.rel_z.iter().fold(0.0, max);
+        [pz, self.xy.iter().fold(0.0, max), abs_sz * pz]
     }
 }
 
@@ -309,24 +348,30 @@ pub struct Candidates {
 }
 
 impl Candidates {
-    /// [`intersect_triangle_sheared`] on lane `lane` (in `mask`) of the group, whose
-    /// triangle is `tri` (`g.triangle(lane)`), with a bound `t_max` at most the prefilter's. From the lane's
-    /// values when they decide it: no zero edge function (so the signs, det and the
-    /// sign of t_scaled passed as in the scalar test) and a t far enough from 0 that the
-    /// scalar test's error bound on t cannot send it to its f64 recheck (see
-    /// `clear_of_zero`); else the scalar test itself.
+    /// The scalar test, [`super::intersect_triangle_sheared`], on lane `lane` (in
+    /// `mask`) of group `g`, with a bound `t_max` at most the prefilter's;
+    /// `may_be_degenerate` false vouches that the lane's triangle is not degenerate
+    /// ([`DEGENERATE`]). From the lane's values when they decide it: no zero edge
+    /// function (so the signs, det and the sign of t_scaled passed as in the scalar
+    /// test) and a t far enough from 0 that the scalar test's error bound on t cannot
+    /// send it to its f64 recheck (see `clear_of_zero`); else the scalar test itself.
     #[inline(always)]
     pub fn hit(
         &self,
         lane: usize,
-        tri: [Vec3; 3],
+        g: &TriGroup,
+        may_be_degenerate: bool,
         shear: &RayShear,
         origin: Vec3,
         t_max: f32,
     ) -> Option<TriangleHit> {
-        let [a, b, c] = tri;
+        // The vertices are read only where they are needed: the scalar test, and the
+        // exact degenerate test in leaves that hold a degenerate triangle.
+        let scalar = || {
+            intersect_triangle_flagged(shear, origin, g.triangle(lane), t_max, may_be_degenerate)
+        };
         if self.zero & (1 << lane) != 0 {
-            return intersect_triangle_sheared(shear, origin, a, b, c, t_max);
+            return scalar();
         }
         let (det, t_scaled) = (self.det[lane], self.t_scaled[lane]);
         // The scalar test's remaining checks, in its order, against the current bound.
@@ -335,8 +380,14 @@ impl Candidates {
         } else {
             t_scaled >= t_max * det
         };
-        if beyond || is_degenerate(a, b, c) {
+        if beyond {
             return None;
+        }
+        if may_be_degenerate {
+            let [a, b, c] = g.triangle(lane);
+            if is_degenerate(a, b, c) {
+                return None;
+            }
         }
         let inv_det = 1.0 / det;
         let t = t_scaled * inv_det;
@@ -344,7 +395,7 @@ impl Candidates {
             return None;
         }
         if !clear_of_zero(t, det, self.sizes.map(|s| s[lane])) {
-            return intersect_triangle_sheared(shear, origin, a, b, c, t_max);
+            return scalar();
         }
         let [u, v, w] = self.e.map(|e| e[lane]);
         Some(TriangleHit {
@@ -358,8 +409,11 @@ impl Candidates {
 
 /// True when `t` exceeds three times the scalar test's bound on its rounding error
 /// (`triangle::t_error`), so that the test keeps t without its f64 recheck. `sizes`
-/// are P, S, Z: the largest magnitude of the relative vertex coordinates, of their
-/// sheared x and y, and of the scaled z. With the edge functions all of one sign
+/// are Pz, S, Z ([`Sheared::sizes`]): the largest magnitude of the relative vertex
+/// z coordinates, of their sheared x and y, and of the scaled z. The largest relative
+/// coordinate P is then at most (S + Pz) (1 + u): a relative x is its sheared x (at
+/// most S (1 + u) before rounding) plus sx times its z, rounded (at most Pz, as
+/// |sx| <= 1); the same for y. With the edge functions all of one sign
 /// (|u| + |v| + |w| <= |det| (1 + 3u)) and |sx|, |sy| <= 1, each term of that bound is
 /// at most: the errors of the sheared coordinates 2 gamma(5) P; of the edge functions
 /// together 24 gamma(5) P S + 6 gamma(2) S^2 =: E; of det E + gamma(2) |det|, of
@@ -375,9 +429,11 @@ fn clear_of_zero(t: f32, det: f32, sizes: [f32; 3]) -> bool {
 /// The bound of [`clear_of_zero`] on the scalar test's bound on t's rounding error.
 #[inline(always)]
 fn t_error_bound(t: f32, det: f32, sizes: [f32; 3]) -> f64 {
-    let [p, s, z] = sizes.map(f64::from);
+    let [pz, s, z] = sizes.map(f64::from);
     let (t, det) = (f64::from(t).abs(), f64::from(det).abs());
     let unit = f64::from(f32::EPSILON) * 0.5;
+    // (S + Pz) (1 + u), with a margin for the rounding of this sum and product.
+    let p = (s + pz) * (1.0 + 2.0 * unit);
     unit * ((120.0 * p * s + 12.0 * s * s) * (z + t) / det + 6.0 * z + 2.0 * t)
 }
 

@@ -1,20 +1,24 @@
 //! Tests of the leaf prefilter and its decided lanes against the scalar triangle test.
 
 use super::*;
-use crate::accel::triangle::t_and_error;
+use crate::accel::triangle::{intersect_triangle_sheared, t_and_error};
 use crate::test_util::Lcg;
 use glam::vec3;
 
 /// Each lane's hit as the wide BVH's leaves compute it: prefilter, then each lane
-/// that passes decided from its values or by the scalar test. Also returns the
-/// prefilter's mask.
+/// that passes decided from its values or by the scalar test, with the group's
+/// degenerate flag as a leaf of it would carry it. Also returns the prefilter's mask.
 fn leaf_hits(ray: &Ray, g: &TriGroup, t_max: f32) -> ([Option<TriangleHit>; LANES], u32) {
     let s = RayShear::new(ray);
     let candidates = RayLeaf::new(ray, &s).candidates(g, t_max);
     let mask = candidates.mask;
+    let degenerate = (0..LANES).any(|lane| {
+        let [a, b, c] = g.triangle(lane);
+        is_degenerate(a, b, c)
+    });
     let hits = std::array::from_fn(|lane| {
         (mask & (1 << lane) != 0)
-            .then(|| candidates.hit(lane, g.triangle(lane), &s, ray.origin, t_max))
+            .then(|| candidates.hit(lane, g, degenerate, &s, ray.origin, t_max))
             .flatten()
     });
     (hits, mask)
@@ -174,7 +178,10 @@ fn decided_lanes_bound_the_scalar_tests_t_error() {
         let far = [0.0, 10.0, 1e4][i % 3];
         let centre = rng.vec() * 4.0 + Vec3::splat(far);
         let thin = if i % 5 == 0 { 1e-3 } else { 1.0 };
-        let (e1, e2) = (rng.dir() * 4.0, rng.dir() * thin);
+        // Some long ones: vertices far to the side of the ray, whose relative x or y
+        // exceeds every relative z many times.
+        let long = if i % 7 == 0 { 1e3 } else { 4.0 };
+        let (e1, e2) = (rng.dir() * long, rng.dir() * thin);
         let tri = [centre, centre + e1, centre + e2];
         let target = centre + e1 * rng.next_f32() * 0.5 + e2 * rng.next_f32() * 0.5;
         let ray = if i % 2 == 0 {
@@ -218,4 +225,24 @@ fn lane_masks_cover_a_leaf_exactly() {
         assert_eq!(lanes as usize, count);
     }
     assert_eq!(lane_mask(1, 5), 1);
+}
+
+#[test]
+fn padding_lanes_never_pass_the_prefilter() {
+    // The leaf test does not mask a group by its leaf's count: the prefilter itself
+    // must reject the NaN padding lanes, whatever the ray and bound.
+    let mut rng = Lcg(5);
+    let mut g = TriGroup::PADDING;
+    g.set_triangle(0, [Vec3::ZERO, Vec3::X, Vec3::Y]);
+    for i in 0..2000 {
+        let mut d = rng.dir();
+        if i % 5 == 0 {
+            d[i % 3] = 0.0;
+        }
+        let ray = Ray::new(rng.vec() * 4.0 - Vec3::splat(2.0), d);
+        for t_max in [f32::INFINITY, 1.0, 0.0, -1.0, f32::NAN] {
+            let (_, mask) = leaf_hits(&ray, &g, t_max);
+            assert_eq!(mask & !1, 0, "{ray:?} {t_max}");
+        }
+    }
 }

@@ -98,6 +98,20 @@ pub fn intersect_triangle_sheared(
     v2: Vec3,
     t_max: f32,
 ) -> Option<TriangleHit> {
+    intersect_triangle_flagged(s, ray_origin, [v0, v1, v2], t_max, true)
+}
+
+/// [`intersect_triangle_sheared`] that skips its exact test for a zero-area triangle
+/// unless `may_be_degenerate`: for callers that decided [`is_degenerate`] once, when
+/// they stored the triangle, instead of per ray. The same answer when that is right.
+#[inline(always)]
+pub(super) fn intersect_triangle_flagged(
+    s: &RayShear,
+    ray_origin: Vec3,
+    [v0, v1, v2]: [Vec3; 3],
+    t_max: f32,
+    may_be_degenerate: bool,
+) -> Option<TriangleHit> {
     // Arrays index without glam's per-component `match`.
     let a = (v0 - ray_origin).to_array();
     let b = (v1 - ray_origin).to_array();
@@ -156,7 +170,7 @@ pub fn intersect_triangle_sheared(
     // Zero-area triangles can leave a rounding-sized det after shearing;
     // reject them exactly (f64 differences and products of f32 are exact, so
     // the cross product is zero only for exactly collinear vertices).
-    if is_degenerate(v0, v1, v2) {
+    if may_be_degenerate && is_degenerate(v0, v1, v2) {
         return None;
     }
 

@@ -15,7 +15,7 @@
 //! same t is met first.
 
 use super::bvh::{Bvh, MAX_DEPTH};
-use super::leaf::{LANES, LeafTris, groups_for};
+use super::leaf::{LANES, LeafTris, groups_for, leaf_count};
 use super::wide_node::{EMPTY, RayBoxes, collapse_node, leaf_lanes};
 pub use super::wide_node::{WIDTH, WideNode};
 use super::wide_query::LeafVisitor;
@@ -123,7 +123,7 @@ impl WideBvh {
         let mut lanes = vec![0; self.prims.len()];
         for node in &self.nodes {
             for lane in 0..WIDTH {
-                let (group, count) = (node.child[lane] as usize, node.count[lane] as usize);
+                let (group, (count, _)) = (node.child[lane] as usize, leaf_count(node.count[lane]));
                 for i in 0..count {
                     let slot = self.leaves.first[group] as usize + i;
                     lanes[self.prims[slot] as usize] = (group * LANES + i) as u32;
@@ -164,74 +164,57 @@ impl WideBvh {
         // nearest interior child (any-hit: its last, which would be popped first).
         let mut next = Some((0, 0.0));
         let boxes = RayBoxes::new(ray);
-        while let Some((index, t_entry)) = next.take().or_else(|| stack.pop()) {
-            // A box pushed earlier may now lie beyond the closest hit found since. With
-            // the slab test's margin: a box entry rounded just past a hit on its face must
-            // not hide a tie there, or the hit found would depend on the visiting order.
-            if t_entry > *t_max * BOX_MARGIN {
-                continue;
-            }
-            let node = &self.nodes[index as usize];
-            let (t, hit) = boxes.test(node, *t_max);
-            let leaf_mask = leaf_lanes(node);
-            let (mut leaves, mut inner) = (hit & leaf_mask, hit & !leaf_mask);
+        loop {
+            // Nodes until one meets leaves: only box tests and the stack in this inner
+            // loop, so that the per-ray constants of the box test can stay in registers
+            // through it, reloaded (if the leaf test below needs the registers) once per
+            // node with leaves, not once per node.
+            let (node, t, mut leaves) = loop {
+                let Some((index, t_entry)) = next.take().or_else(|| stack.pop()) else {
+                    return false;
+                };
+                // A box pushed earlier may now lie beyond the closest hit found since.
+                // With the slab test's margin: a box entry rounded just past a hit on its
+                // face must not hide a tie there, or the hit found would depend on the
+                // visiting order.
+                if t_entry > *t_max * BOX_MARGIN {
+                    continue;
+                }
+                let node = &self.nodes[index as usize];
+                let (t, hit) = boxes.test(node, *t_max);
+                let leaf_mask = leaf_lanes(node);
+                let (leaves, inner) = (hit & leaf_mask, hit & !leaf_mask);
+                if NEAREST_FIRST {
+                    next = self.queue_nearest_first(node, &t, inner, &mut stack);
+                } else {
+                    // Any hit: the last interior child next, the others pushed. Its
+                    // leaves are tested below before either.
+                    let mut inner = inner;
+                    while inner != 0 {
+                        let lane = inner.trailing_zeros() as usize;
+                        inner &= inner - 1;
+                        let entry = (node.child[lane], t[lane]);
+                        if inner == 0 {
+                            next = Some(entry);
+                        } else {
+                            stack.push(entry);
+                        }
+                    }
+                }
+                if leaves != 0 {
+                    break (node, t, leaves);
+                }
+            };
             if !NEAREST_FIRST {
                 while leaves != 0 {
                     let lane = leaves.trailing_zeros() as usize;
                     leaves &= leaves - 1;
                     let (child, count) = (node.child[lane], node.count[lane]);
-                    if visitor.leaf(child as usize, count as usize, t_max) {
+                    if visitor.leaf(child as usize, count, t_max) {
                         return true;
                     }
                 }
-                while inner != 0 {
-                    let lane = inner.trailing_zeros() as usize;
-                    inner &= inner - 1;
-                    let entry = (node.child[lane], t[lane]);
-                    if inner == 0 {
-                        next = Some(entry);
-                    } else {
-                        stack.push(entry);
-                    }
-                }
                 continue;
-            }
-            // Interior children met: the nearest next, the others pushed nearest last so
-            // that it is popped first; most nodes have at most one, which needs no sort.
-            if inner & inner.wrapping_sub(1) == 0 {
-                if inner != 0 {
-                    let lane = inner.trailing_zeros() as usize;
-                    next = Some((node.child[lane], t[lane]));
-                }
-            } else if (inner & (inner - 1)).count_ones() == 1 {
-                // Two: one comparison.
-                let (a, b) = (inner.trailing_zeros(), 31 - inner.leading_zeros());
-                let (a, b) = (key(t[a as usize], a), key(t[b as usize], b));
-                let (near, far) = if a < b { (a, b) } else { (b, a) };
-                let (near, far) = (near as u32 as usize, far as u32 as usize);
-                stack.push((node.child[far], t[far]));
-                next = Some((node.child[near], t[near]));
-            } else {
-                let mut keys = [0u64; WIDTH];
-                let mut n = 0;
-                while inner != 0 {
-                    let lane = inner.trailing_zeros();
-                    inner &= inner - 1;
-                    let k = key(t[lane as usize], lane);
-                    let mut i = n;
-                    while i > 0 && keys[i - 1] < k {
-                        keys[i] = keys[i - 1];
-                        i -= 1;
-                    }
-                    keys[i] = k;
-                    n += 1;
-                }
-                for &k in &keys[..n - 1] {
-                    let lane = k as u32 as usize;
-                    stack.push((node.child[lane], t[lane]));
-                }
-                let lane = keys[n - 1] as u32 as usize;
-                next = Some((node.child[lane], t[lane]));
             }
             // Leaves nearest first, after the interior children are queued.
             while leaves != 0 {
@@ -250,14 +233,61 @@ impl WideBvh {
                 leaves &= !(1 << lane);
                 let lane = lane as usize;
                 let (child, count) = (node.child[lane], node.count[lane]);
-                if t[lane] <= *t_max * BOX_MARGIN
-                    && visitor.leaf(child as usize, count as usize, t_max)
-                {
+                if t[lane] <= *t_max * BOX_MARGIN && visitor.leaf(child as usize, count, t_max) {
                     return true;
                 }
             }
         }
-        false
+    }
+
+    /// Queues the interior children `inner` of `node` met at entry distances `t`
+    /// nearest first: returns the nearest, to visit next, and pushes the others nearest
+    /// last, so that it is popped first; most nodes have at most one, which needs no
+    /// sort.
+    #[inline(always)]
+    fn queue_nearest_first(
+        &self,
+        node: &WideNode,
+        t: &[f32; WIDTH],
+        mut inner: u32,
+        stack: &mut Stack,
+    ) -> Option<(u32, f32)> {
+        if inner & inner.wrapping_sub(1) == 0 {
+            if inner == 0 {
+                return None;
+            }
+            let lane = inner.trailing_zeros() as usize;
+            return Some((node.child[lane], t[lane]));
+        }
+        if (inner & (inner - 1)).count_ones() == 1 {
+            // Two: one comparison.
+            let (a, b) = (inner.trailing_zeros(), 31 - inner.leading_zeros());
+            let (a, b) = (key(t[a as usize], a), key(t[b as usize], b));
+            let (near, far) = if a < b { (a, b) } else { (b, a) };
+            let (near, far) = (near as u32 as usize, far as u32 as usize);
+            stack.push((node.child[far], t[far]));
+            return Some((node.child[near], t[near]));
+        }
+        let mut keys = [0u64; WIDTH];
+        let mut n = 0;
+        while inner != 0 {
+            let lane = inner.trailing_zeros();
+            inner &= inner - 1;
+            let k = key(t[lane as usize], lane);
+            let mut i = n;
+            while i > 0 && keys[i - 1] < k {
+                keys[i] = keys[i - 1];
+                i -= 1;
+            }
+            keys[i] = k;
+            n += 1;
+        }
+        for &k in &keys[..n - 1] {
+            let lane = k as u32 as usize;
+            stack.push((node.child[lane], t[lane]));
+        }
+        let lane = keys[n - 1] as u32 as usize;
+        Some((node.child[lane], t[lane]))
     }
 
     /// Checks every structural invariant against the triangles it was built from;
@@ -337,7 +367,7 @@ impl WideBvh {
                     Ok(())
                 };
                 self.leaves
-                    .validate_leaf(child as usize, count as usize, &mut used, leaf)
+                    .validate_leaf(child as usize, count, &mut used, leaf)
                     .map_err(|e| format!("node {i} lane {lane}: {e}"))?;
             }
         }

@@ -80,11 +80,12 @@ pub(super) struct RayBoxes {
 
 impl RayBoxes {
     pub(super) fn new(ray: &Ray) -> RayBoxes {
-        let inv = ray.dir.recip();
+        // An array indexes without glam's per-component `match` (a chain of branches).
+        let inv = ray.dir.recip().to_array();
         let neg = |a: usize| inv[a].is_sign_negative() as usize;
         RayBoxes {
             origin: ray.origin.to_array(),
-            inv_dir: inv.to_array(),
+            inv_dir: inv,
             near: [3 * neg(0), 1 + 3 * neg(1), 2 + 3 * neg(2)],
             far: [3 - 3 * neg(0), 4 - 3 * neg(1), 5 - 3 * neg(2)],
         }

@@ -9,15 +9,16 @@
 
 use multiversion::multiversion;
 
-use super::leaf::{LANES, RayLeaf, groups_for, lane_mask};
-use super::triangle::{RayShear, TriangleHit, intersect_triangle_sheared};
+use super::leaf::{LANES, RayLeaf, groups_for, leaf_count};
+use super::triangle::{RayShear, TriangleHit, intersect_triangle_flagged};
 use super::{Ray, WideBvh};
 
 /// What a query does at each leaf the traversal reaches.
 pub(super) trait LeafVisitor {
-    /// Tests the leaf at group `group` with `count` triangles; may lower `t_max` (the
-    /// traversal's cull distance); returns true to stop the traversal.
-    fn leaf(&mut self, group: usize, count: usize, t_max: &mut f32) -> bool;
+    /// Tests the leaf at group `group` with the lane count `count` (`leaf::leaf_lane`:
+    /// triangles and flag); may lower `t_max` (the traversal's cull distance); returns
+    /// true to stop the traversal.
+    fn leaf(&mut self, group: usize, count: u32, t_max: &mut f32) -> bool;
 }
 
 /// The per-ray constants of the leaf test.
@@ -29,7 +30,7 @@ struct RayLeaves<'a> {
 }
 
 impl RayLeaves<'_> {
-    /// Tests the triangles of the leaf at `group` with `count` triangles: the SoA
+    /// Tests the triangles of the leaf at `group` with the lane count `count`: the SoA
     /// prefilter, then the exact test's answer on each lane it keeps (from the lane's
     /// values where they decide it), both against `*bound`;
     /// `hit(prim, lane, hit, bound)` may lower the bound and returns true to stop
@@ -40,26 +41,27 @@ impl RayLeaves<'_> {
     fn hits<const DECIDE: bool>(
         &self,
         group: usize,
-        count: usize,
+        count: u32,
         bound: &mut f32,
         mut hit: impl FnMut(u32, u32, &TriangleHit, &mut f32) -> bool,
     ) -> bool {
         let (wide, ray) = (self.wide, self.ray);
+        let (count, degenerate) = leaf_count(count);
         for i in 0..groups_for(count) {
             let g = &wide.leaves.groups[group + i];
             // The bound only falls within the group, so the group's first bound lets
             // through every lane a later, lower one accepts.
             let candidates = self.pre.candidates(g, *bound);
-            let mut lanes = candidates.mask & lane_mask(i, count);
+            // Padding lanes (NaN) never pass the prefilter: no mask by the count.
+            let mut lanes = candidates.mask;
             while lanes != 0 {
                 let lane = lanes.trailing_zeros() as usize;
                 lanes &= lanes - 1;
-                let tri = g.triangle(lane);
                 let h = if DECIDE {
-                    candidates.hit(lane, tri, &self.shear, ray.origin, *bound)
+                    candidates.hit(lane, g, degenerate, &self.shear, ray.origin, *bound)
                 } else {
-                    let [a, b, c] = tri;
-                    intersect_triangle_sheared(&self.shear, ray.origin, a, b, c, *bound)
+                    let tri = g.triangle(lane);
+                    intersect_triangle_flagged(&self.shear, ray.origin, tri, *bound, degenerate)
                 };
                 let Some(h) = h else {
                     continue;
@@ -92,7 +94,7 @@ struct ClosestLeaves<'a> {
 
 impl LeafVisitor for ClosestLeaves<'_> {
     #[inline(always)]
-    fn leaf(&mut self, group: usize, count: usize, t_max: &mut f32) -> bool {
+    fn leaf(&mut self, group: usize, count: u32, t_max: &mut f32) -> bool {
         let (best, limit) = (&mut self.best, self.limit);
         self.leaves
             .hits::<true>(group, count, &mut self.bound, |p, lane, h, bound| {
@@ -115,7 +117,7 @@ struct AnyLeaves<'a, F> {
 
 impl<F: FnMut(u32, &TriangleHit) -> bool> LeafVisitor for AnyLeaves<'_, F> {
     #[inline(always)]
-    fn leaf(&mut self, group: usize, count: usize, _: &mut f32) -> bool {
+    fn leaf(&mut self, group: usize, count: u32, _: &mut f32) -> bool {
         let visit = &mut self.visit;
         self.leaves
             .hits::<false>(group, count, &mut self.bound, |p, _, h, _| visit(p, h))
@@ -160,9 +162,9 @@ impl WideBvh {
         &self,
         ray: &Ray,
         t_max: f32,
-        visit: impl FnMut(u32, &TriangleHit) -> bool,
+        mut visit: impl FnMut(u32, &TriangleHit) -> bool,
     ) -> bool {
-        any_hit_dispatched(self, ray, t_max, visit)
+        any_hit_dispatched(self, ray, t_max, &mut visit)
     }
 
     /// [`Self::any_hit`] compiled for whatever target features the caller has.
@@ -214,11 +216,11 @@ fn closest_hit_dispatched(
 
 /// [`WideBvh::any_hit`] for the best instruction set the CPU has.
 #[multiversion(targets("x86_64+avx2+fma", "x86_64+sse4.2"))]
-fn any_hit_dispatched<F: FnMut(u32, &TriangleHit) -> bool>(
+fn any_hit_dispatched(
     wide: &WideBvh,
     ray: &Ray,
     t_max: f32,
-    visit: F,
+    visit: &mut dyn FnMut(u32, &TriangleHit) -> bool,
 ) -> bool {
     wide.any_hit_inlined(ray, t_max, visit)
 }

@@ -1,6 +1,7 @@
 //! Tests of the wide BVH against the binary tree and brute force.
 
 use super::*;
+use crate::accel::leaf::DEGENERATE;
 use crate::accel::triangle::{RayShear, TriangleHit, intersect_triangle_sheared};
 use crate::accel::{BvhNode, SplitMethod};
 use crate::test_util::Lcg;
@@ -533,4 +534,59 @@ fn the_collapse_groups_leaves_in_slot_order() {
         };
         assert_eq!(bits(&wide.leaves), bits(&leaves));
     }
+}
+
+#[test]
+fn degenerate_triangles_are_flagged_and_never_hit() {
+    // Zero-area triangles (exactly collinear: small dyadic coordinates) among ordinary
+    // ones, and rays aimed at points of their segments: rounding in the shear can give
+    // such a triangle a nonzero det of one sign, which only the exact test rejects, so
+    // their leaves must carry the flag that keeps it.
+    let mut rng = Lcg(31);
+    let mut tris = random_tris(300, 32);
+    let ordinary = tris.len() as u32;
+    for _ in 0..60 {
+        let p = ((rng.vec() * 64.0).floor() - Vec3::splat(32.0)) / 8.0;
+        let d = ((rng.vec() * 16.0).floor() - Vec3::splat(8.0)) / 16.0;
+        tris.push([p, p + d, p + 3.0 * d]);
+    }
+    let (_, wide) = both(&tris, SplitMethod::SahBinned);
+    wide.validate(&tris).unwrap();
+    let flagged: Vec<(usize, usize)> = (0..wide.nodes.len())
+        .flat_map(|i| (0..WIDTH).map(move |l| (i, l)))
+        .filter(|&(i, l)| wide.nodes[i].count[l] & DEGENERATE != 0)
+        .collect();
+    assert!(!flagged.is_empty());
+    let mut aimed = 0;
+    for i in 0..30_000 {
+        let [a, _, c] = tris[ordinary as usize + i % 60];
+        let target = a.lerp(c, rng.next_f32());
+        let origin = target + rng.dir() * (1.0 + 3.0 * rng.next_f32());
+        let ray = Ray::new(origin, target - origin);
+        let (expect, near_tie) = brute_closest(&tris, &ray, f32::INFINITY);
+        if near_tie {
+            continue;
+        }
+        let got = wide.closest_hit(&ray, f32::INFINITY).map(|(p, h)| (p, h.t));
+        assert_eq!(got, expect, "{ray:?}");
+        assert!(got.is_none_or(|(p, _)| p < ordinary), "{ray:?}");
+        wide.any_hit(&ray, f32::INFINITY, |p, _| {
+            assert!(p < ordinary, "{ray:?}");
+            false
+        });
+        aimed += 1;
+    }
+    assert!(aimed > 20_000, "{aimed} rays");
+    // A missing flag, or one on a leaf of ordinary triangles, fails validation.
+    let mut bad = wide.clone();
+    let (i, l) = flagged[0];
+    bad.nodes[i].count[l] &= !DEGENERATE;
+    assert!(bad.validate(&tris).is_err());
+    let mut bad = wide.clone();
+    let (i, l) = (0..wide.nodes.len())
+        .flat_map(|i| (0..WIDTH).map(move |l| (i, l)))
+        .find(|&(i, l)| (1..DEGENERATE).contains(&wide.nodes[i].count[l]))
+        .unwrap();
+    bad.nodes[i].count[l] |= DEGENERATE;
+    assert!(bad.validate(&tris).is_err());
 }
