@@ -479,11 +479,7 @@ impl Bins {
         if refs.len() >= 2 * PARALLEL_BIN_CHUNK {
             *self = refs
                 .par_chunks(PARALLEL_BIN_CHUNK)
-                .map(|c| {
-                    let mut bins = Bins::empty(centroids);
-                    bins.add(c);
-                    bins
-                })
+                .map(|c| bin_chunk(c, centroids))
                 .reduce(|| Bins::empty(centroids), Bins::merge);
         } else {
             self.reset(centroids);
@@ -571,6 +567,15 @@ impl Bins {
     }
 }
 
+/// The bins of one chunk of a large node, for the best instruction set the CPU has (a
+/// closure of [`Bins::fill`] would be compiled for the baseline one, outside `split`).
+#[multiversion(targets("x86_64+avx2+fma", "x86_64+sse4.2"))]
+fn bin_chunk(refs: &[PrimRef], centroids: Box4) -> Bins {
+    let mut bins = Bins::empty(centroids);
+    bins.add(refs);
+    bins
+}
+
 /// A candidate plane: centroids in bins `< bin` on `axis` go left.
 struct Plane {
     axis: usize,
@@ -627,6 +632,11 @@ fn goes_left(x: f32, bin: usize) -> bool {
 }
 
 /// Cheapest binned-SAH plane over the three axes, if any separates the centroids.
+/// The sweeps visit only the occupied bins, from a bit mask: an empty bin changes
+/// neither the running box nor the count, so plane `k` costs what the plane after
+/// the previous occupied bin does, and only a strictly cheaper plane replaces the best
+/// one. The choice is the per-bin sweep's (the tests' reference), without its
+/// unpredictable branch per bin.
 #[inline(always)]
 fn best_sah_plane(bins: &Bins) -> Option<Plane> {
     let mut best: Option<Plane> = None;
@@ -635,33 +645,48 @@ fn best_sah_plane(bins: &Bins) -> Option<Plane> {
             continue;
         }
         let (counts, boxes) = (&bins.counts[axis], &bins.boxes[axis]);
-        // right_cost[k]: area * blocks of bins k.. (the right side of plane k).
-        let mut right_cost = [0.0f32; BINS];
-        let mut acc_box = Box4::EMPTY;
-        let mut acc_n = 0u32;
-        let mut right = f32::INFINITY; // empty right side: not a split
-        for k in (1..BINS).rev() {
-            // An empty bin changes neither the box nor the count: skip the area.
-            if counts[k] > 0 {
-                acc_box = acc_box.union(boxes[k].box4());
-                acc_n += counts[k];
-                right = acc_box.surface_area() * blocks(acc_n);
-            }
-            right_cost[k] = right;
+        let mut occupied = 0u32;
+        for (k, &n) in counts.iter().enumerate() {
+            occupied |= u32::from(n > 0) << k;
         }
-        let mut left_box = Box4::EMPTY;
+        if occupied == 0 {
+            continue;
+        }
+        // right_cost[r]: area * blocks of the occupied bins from the r-th (counting
+        // from 0 upwards) on, for r >= 1 (the lowest occupied bin is never on the right).
+        let mut right_cost = [0.0f32; BINS];
+        let mut acc_box = BinBox::EMPTY;
+        let mut acc_n = 0u32;
+        let mut rank = occupied.count_ones() as usize;
+        let mut rest = occupied & occupied.wrapping_sub(1);
+        while rest != 0 {
+            let k = (u32::BITS - 1 - rest.leading_zeros()) as usize % BINS;
+            rest ^= 1 << k;
+            rank -= 1;
+            acc_box = acc_box.union(boxes[k]);
+            acc_n += counts[k];
+            right_cost[rank % BINS] = acc_box.box4().surface_area() * blocks(acc_n);
+        }
+        // The plane after each occupied bin but the highest (which has nothing
+        // on its right).
+        let mut left_box = BinBox::EMPTY;
         let mut left_n = 0u32;
-        for k in 1..BINS {
-            // Plane k costs the same as plane k - 1 when bin k - 1 is empty,
-            // and only a strictly cheaper plane replaces the best one.
-            if counts[k - 1] == 0 {
-                continue;
-            }
-            left_box = left_box.union(boxes[k - 1].box4());
-            left_n += counts[k - 1];
-            let cost = left_box.surface_area() * blocks(left_n) + right_cost[k];
+        let mut rank = 0;
+        let highest = u32::BITS - 1 - occupied.leading_zeros();
+        let mut rest = occupied & !(1 << highest);
+        while rest != 0 {
+            let k = rest.trailing_zeros() as usize % BINS;
+            rest &= rest - 1;
+            rank += 1;
+            left_box = left_box.union(boxes[k]);
+            left_n += counts[k];
+            let cost = left_box.box4().surface_area() * blocks(left_n) + right_cost[rank % BINS];
             if cost.is_finite() && best.as_ref().is_none_or(|b| cost < b.cost) {
-                best = Some(Plane { axis, bin: k, cost });
+                best = Some(Plane {
+                    axis,
+                    bin: k + 1,
+                    cost,
+                });
             }
         }
     }
