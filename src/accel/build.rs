@@ -604,17 +604,15 @@ fn bin_position(c: f32, min: f32, scale: f32) -> f32 {
 
 /// [`bin_position`] truncated, lane by lane. `x as i32` would check every lane for
 /// NaN and overflow (five instructions each, a tenth of the build); `x` is already
-/// in `0..=BINS-1`, where adding and subtracting 2^23 rounds it to an integer, one
-/// less when that rounded up is its floor, and that plus 2^23 holds the floor in its
-/// low mantissa bits: exact truncation, in float SIMD lanes.
+/// in `0..=BINS-1`, where its floor plus 2^23 holds the floor in its low mantissa
+/// bits: exact truncation, in float SIMD lanes. The floor is one `roundps` in the
+/// SSE4.1+ clones of `split` (the baseline clone calls `floorf`: the same values).
 #[inline(always)]
 fn bins_of(c: Lanes, min: Lanes, scale: Lanes) -> [u32; 4] {
     const MAGIC: f32 = (1u32 << 23) as f32;
     std::array::from_fn(|i| {
         let x = bin_position(c[i], min[i], scale[i]);
-        let rounded = (x + MAGIC) - MAGIC;
-        let floor = rounded - if rounded > x { 1.0 } else { 0.0 };
-        (floor + MAGIC).to_bits() - MAGIC.to_bits()
+        (x.floor() + MAGIC).to_bits() - MAGIC.to_bits()
     })
 }
 
