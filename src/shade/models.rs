@@ -231,6 +231,14 @@ fn comparison_t(phong: Vec3, blinn_phong: Vec3) -> f32 {
 mod tests {
     use super::*;
 
+    const ALL_MODELS: [ShadingModel; 5] = [
+        ShadingModel::Lambertian,
+        ShadingModel::Phong,
+        ShadingModel::BlinnPhong,
+        ShadingModel::LinearGradient,
+        ShadingModel::LinearGradientComparison,
+    ];
+
     const EPS: f32 = 1e-5;
 
     /// Unit vector in the xz plane at `deg` degrees from +z (towards +x).
@@ -317,13 +325,7 @@ mod tests {
         let c = Gradient::default_comparison();
         for l in [at_angle(120.0), at_angle(90.0), -Vec3::Z, Vec3::NAN] {
             let i = input(l, Vec3::Z);
-            for model in [
-                ShadingModel::Lambertian,
-                ShadingModel::Phong,
-                ShadingModel::BlinnPhong,
-                ShadingModel::LinearGradient,
-                ShadingModel::LinearGradientComparison,
-            ] {
+            for model in ALL_MODELS {
                 assert_eq!(
                     shading(model, &g, &c).shade(&i),
                     Vec3::ZERO,
@@ -548,13 +550,7 @@ mod tests {
         inputs.push(bad);
         let bits = |v: Vec3| v.to_array().map(f32::to_bits);
         for enabled in [true, false] {
-            for model in [
-                ShadingModel::Lambertian,
-                ShadingModel::Phong,
-                ShadingModel::BlinnPhong,
-                ShadingModel::LinearGradient,
-                ShadingModel::LinearGradientComparison,
-            ] {
+            for model in ALL_MODELS {
                 let s = Shading {
                     enabled,
                     ..shading(model, &g, &c)
