@@ -24,7 +24,8 @@ pub struct WideNode {
     pub bounds: [[f32; WIDTH]; 6],
     /// Interior child: its node index. Leaf child: its first group in `leaves`. Unused: `u32::MAX`.
     pub child: [u32; WIDTH],
-    /// Triangles of a leaf child; 0 for an interior or unused child.
+    /// Triangles of a leaf child, with [`super::leaf::DEGENERATE`] set when one of them is
+    /// degenerate (read it through [`super::leaf::leaf_count`]); 0 for an interior or unused child.
     pub count: [u32; WIDTH],
 }
 
