@@ -2,7 +2,7 @@
 //! SAH-based Bounding Volume Hierarchies", IEEE Symposium on Interactive Ray
 //! Tracing 2007, and an object-median split for comparison.
 //!
-//! The builder moves [`PrimRef`]s (a primitive's box and index together), so
+//! The builder moves `PrimRef`s (a primitive's box and index together), so
 //! binning and partitioning read memory in order instead of gathering boxes
 //! through an index array. Each node's bounds come from its parent (from the
 //! SAH bins and the partition pass), so a node's primitives are read twice:

@@ -76,7 +76,7 @@ pub fn groups_for(count: usize) -> usize {
 }
 
 /// Bit of a leaf lane's `count` ([`leaf_lane`]) set when one of the leaf's triangles is
-/// degenerate ([`is_degenerate`]: exactly collinear vertices). Decided once, when the
+/// degenerate (`is_degenerate`: exactly collinear vertices). Decided once, when the
 /// leaf is grouped, so that a query repeats that exact f64 test only in such leaves,
 /// not on every lane it may hit (no memory per triangle: counts are far below 2^31).
 pub const DEGENERATE: u32 = 1 << 31;

@@ -1,6 +1,6 @@
 //! The 8-wide BVH's node format: [`WideNode`] (child boxes structure-of-arrays,
 //! so that one slab test covers all eight), the per-ray slab test over a node's
-//! children ([`RayBoxes`]), and the collapse of the binary tree into such nodes.
+//! children (`RayBoxes`), and the collapse of the binary tree into such nodes.
 
 use glam::Vec3;
 use wide::u32x8;

@@ -7,7 +7,7 @@ use glam::{Vec2, Vec3};
 
 use super::components::{MeshData, Vertex};
 
-/// A parallelogram `origin + s*edge_u + t*edge_v` (s, t in [0,1]) facing `edge_u x edge_v`.
+/// A parallelogram `origin + s*edge_u + t*edge_v` (s, t in \[0, 1\]) facing `edge_u x edge_v`.
 pub fn parallelogram(origin: Vec3, edge_u: Vec3, edge_v: Vec3) -> MeshData {
     let normal = edge_u.cross(edge_v).normalize_or_zero();
     let corner = |s: f32, t: f32| Vertex {
