@@ -17,7 +17,9 @@ from glint_ray import split
 REPO = Path(__file__).resolve().parents[3]
 SCENE = REPO / "scenes" / "cornell_box.ron"
 SIZE = ["--width", "160", "--height", "120"]
-SPP = 32
+# Enough samples that each of the 8 parts runs long enough to be caught and killed (at
+# 32, a part took about 25 ms on a quiet machine and the killer mostly missed them all).
+SPP = 256
 
 
 def glint_binary():
@@ -76,7 +78,7 @@ def test_a_killed_worker_is_retried_and_the_result_is_bit_identical(tmp_path):
             running = glint_parts_of(scene)
             if running:
                 # Let the part get going, then kill the Ray worker that runs it.
-                time.sleep(0.05)
+                time.sleep(0.01)
                 pid, worker = running[0]
                 if os.path.exists(f"/proc/{pid}"):
                     os.kill(worker, signal.SIGKILL)
