@@ -12,7 +12,7 @@
 //! fixed order with exact operations (min, max, integer sums), so the tree is
 //! identical whatever the thread count.
 //!
-//! This file holds the recursion and the primitive records; [`bins`], the bins, the
+//! This file holds the recursion and the primitive records; `bins`, the bins, the
 //! SAH sweep over them and the partition by the chosen plane.
 
 use glam::Vec3;
