@@ -16,6 +16,10 @@ impl Lcg {
             .wrapping_add(1442695040888963407);
         ((self.0 >> 40) as f32) / (1u64 << 24) as f32
     }
+    /// Uniform in `0..n` (`n` at most 2^24).
+    pub fn below(&mut self, n: u32) -> u32 {
+        ((self.next_f32() * n as f32) as u32).min(n - 1)
+    }
     /// Uniform in the unit cube.
     pub fn vec(&mut self) -> Vec3 {
         vec3(self.next_f32(), self.next_f32(), self.next_f32())

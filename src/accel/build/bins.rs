@@ -352,6 +352,7 @@ mod tests {
     use super::super::NodeBounds;
     use super::*;
     use crate::accel::Aabb;
+    use crate::test_util::Lcg;
 
     /// The per-axis sweep [`best_sah_plane`] must agree with (the builder's before it
     /// swept the axes together).
@@ -400,26 +401,20 @@ mod tests {
         // Bins as nodes of a few to many primitives leave them: mostly empty to full,
         // flat and inverted (empty) boxes, infinite coordinates, ties between bins
         // and between axes (copied boxes), an axis with zero extent.
-        let mut seed = 0x9e37_79b9_7f4a_7c15u64;
-        let mut next = move || {
-            seed ^= seed << 13;
-            seed ^= seed >> 7;
-            seed ^= seed << 17;
-            seed
-        };
+        let mut rng = Lcg(0x9e37_79b9_7f4a_7c15);
         let mut planes = 0;
         for round in 0..20_000 {
             let mut bins = Bins::empty(Box4::EMPTY);
-            let full = next() % 17;
+            let full = rng.below(17);
             for axis in 0..3 {
-                bins.scale[axis] = if next() % 13 == 0 { 0.0 } else { 1.0 };
+                bins.scale[axis] = if rng.below(13) == 0 { 0.0 } else { 1.0 };
                 for k in 0..BINS {
-                    if next() % 16 >= full {
+                    if rng.below(16) >= full {
                         continue;
                     }
-                    bins.counts[axis][k] = (next() % 9 + 1) as u32;
-                    let v: [f32; 4] = std::array::from_fn(|_| (next() % 64) as f32 * 0.25 - 8.0);
-                    let (lo, hi): (Lanes, Lanes) = match next() % 20 {
+                    bins.counts[axis][k] = rng.below(9) + 1;
+                    let v: [f32; 4] = std::array::from_fn(|_| rng.below(64) as f32 * 0.25 - 8.0);
+                    let (lo, hi): (Lanes, Lanes) = match rng.below(20) {
                         0 => (Box4::EMPTY.min, Box4::EMPTY.max),
                         1 => ([f32::NEG_INFINITY, 0.0, 0.0, 0.0], [1.0, 1.0, 1.0, 0.0]),
                         2 => ([v[0], v[1], 0.0, 0.0], [v[0], 8.0, 0.0, 0.0]),
@@ -447,18 +442,12 @@ mod tests {
     fn two_sets_of_bins_match_one_pass_bit_for_bit() {
         // Coordinates of +0 and -0 (ties the order decides) among a few values,
         // enough primitives for the two sets; odd and even counts.
-        let mut seed = 0x2545_f491_4f6c_dd1du64;
-        let mut next = move || {
-            seed ^= seed << 13;
-            seed ^= seed >> 7;
-            seed ^= seed << 17;
-            seed
-        };
+        let mut rng = Lcg(0x2545_f491_4f6c_dd1d);
         for n in [TWO_SETS_MIN, 999, 4096] {
             let values = [0.0f32, -0.0, 1.0, -1.0, 0.5];
             let refs: Vec<PrimRef> = (0..n)
                 .map(|i| {
-                    let mut v = || values[(next() % 5) as usize];
+                    let mut v = || values[rng.below(5) as usize];
                     let lo = Vec3::new(v(), v(), v());
                     let hi = lo + Vec3::new(v().abs(), v().abs(), v().abs());
                     PrimRef::new(i, &Aabb::new(lo, hi))
