@@ -18,6 +18,13 @@ if [[ -z "$glint" ]]; then
   cargo build --release --manifest-path "$root/Cargo.toml" --bin glint >&2
   glint="$target/release/glint"
 fi
+if [[ "$(uname -m)" != x86_64 ]]; then
+  echo "subnormal_check.sh: x86-64 only (it sets the SSE control register MXCSR)" >&2
+  exit 2
+fi
+for tool in gcc bc; do
+  command -v "$tool" >/dev/null || { echo "subnormal_check.sh: needs $tool" >&2; exit 2; }
+done
 tmp="$(mktemp -d)"
 trap 'rm -rf "$tmp"' EXIT
 cat >"$tmp/ftz.c" <<'EOF'
