@@ -109,6 +109,13 @@ impl WideBvh {
             + size_of_val(self.prims.as_slice())
     }
 
+    /// The caller's index of the triangle in lane `lane` of group `group` (a lane
+    /// holding a triangle, not padding).
+    #[inline(always)]
+    pub fn prim_at(&self, group: usize, lane: usize) -> u32 {
+        self.prims[self.leaves.first[group] as usize + lane]
+    }
+
     /// The vertices of the triangle at `lane` (`group * LANES + lane`, as
     /// [`WideBvh::closest_hit_at`] reports it), read from its leaf group.
     #[inline]

@@ -66,7 +66,7 @@ impl RayLeaves<'_> {
                 let Some(h) = h else {
                     continue;
                 };
-                let p = wide.prims[wide.leaves.first[group + i] as usize + lane];
+                let p = wide.prim_at(group + i, lane);
                 if hit(p, ((group + i) * LANES + lane) as u32, &h, bound) {
                     return true;
                 }
