@@ -5,7 +5,7 @@
 
 use multiversion::multiversion;
 use rayon::prelude::*;
-use wide::{f32x4, f32x8};
+use wide::f32x4;
 
 use super::{BINS, Box4, Lanes, PARALLEL_BIN_CHUNK, PrimRef, TWO_SETS_MIN, blocks};
 
@@ -14,18 +14,25 @@ use super::{BINS, Box4, Lanes, PARALLEL_BIN_CHUNK, PrimRef, TWO_SETS_MIN, blocks
 /// the min of the negated corners picks the same values as [`Box4::grow`]'s max,
 /// bit for bit (zeros' signs and NaNs included).
 #[derive(Clone, Copy)]
-struct BinBox(f32x8);
+#[repr(C, align(32))]
+struct BinBox([f32; 8]);
 
 impl BinBox {
-    const EMPTY: BinBox = BinBox(f32x8::new([f32::INFINITY; 8]));
+    const EMPTY: BinBox = BinBox([f32::INFINITY; 8]);
 
     /// Grows to contain `o` (a [`PrimRef::flipped`] or another bin box): per lane
-    /// `o < self ? o : self`, which is what `fast_min` computes (`minps`). Written as a
-    /// select on the bin's memory, the compiler turned it into a masked store, whose
-    /// value the next primitive in the same bin cannot load until it has retired.
+    /// `o < self ? o : self` (`minps`). On a copy, stored whole: written as a select on
+    /// the bin's memory, the compiler turned it into a masked store, whose value the
+    /// next primitive in the same bin cannot load until it has retired. Plain lanes,
+    /// not `wide`'s f32x8, which is two halves in the dispatched clones (no AVX cfg):
+    /// one `vminps` of eight lanes in the AVX2 clone instead of two of four.
     #[inline(always)]
-    fn grow(&mut self, o: f32x8) {
-        self.0 = o.fast_min(self.0);
+    fn grow(&mut self, o: [f32; 8]) {
+        let mut m = self.0;
+        for i in 0..8 {
+            m[i] = if o[i] < m[i] { o[i] } else { m[i] };
+        }
+        self.0 = m;
     }
 
     #[inline(always)]
@@ -36,7 +43,7 @@ impl BinBox {
 
     #[inline(always)]
     fn box4(&self) -> Box4 {
-        let b = self.0.to_array();
+        let b = self.0;
         Box4 {
             min: [b[0], b[1], b[2], b[3]],
             max: [-b[4], -b[5], -b[6], -b[7]],
@@ -46,9 +53,7 @@ impl BinBox {
     #[cfg(test)]
     fn of(b: Box4) -> BinBox {
         let (lo, hi) = (b.min, b.max);
-        BinBox(f32x8::new([
-            lo[0], lo[1], lo[2], lo[3], -hi[0], -hi[1], -hi[2], -hi[3],
-        ]))
+        BinBox([lo[0], lo[1], lo[2], lo[3], -hi[0], -hi[1], -hi[2], -hi[3]])
     }
 }
 
@@ -464,7 +469,7 @@ mod tests {
             assert_eq!(one.counts[..3], two.counts[..3], "{n}");
             for axis in 0..3 {
                 for k in 0..BINS {
-                    let bits = |b: &Bins| b.boxes[axis][k].0.to_array().map(f32::to_bits);
+                    let bits = |b: &Bins| b.boxes[axis][k].0.map(f32::to_bits);
                     assert_eq!(bits(&one), bits(&two), "{n} prims, axis {axis} bin {k}");
                 }
             }
