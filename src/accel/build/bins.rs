@@ -41,6 +41,20 @@ impl BinBox {
         self
     }
 
+    /// [`Box4::surface_area`] of [`BinBox::box4`], bit for bit, without negating the
+    /// upper corner: a lower plus a negated upper coordinate is `lo - hi`, exactly the
+    /// extent negated (IEEE rounding is symmetric), so the products and sums are the
+    /// extent's, and it is positive exactly where `lo > hi` (an empty axis).
+    #[inline(always)]
+    fn surface_area(&self) -> f32 {
+        let b = self.0;
+        let d: [f32; 4] = std::array::from_fn(|i| b[i] + b[4 + i]);
+        if d[0] > 0.0 || d[1] > 0.0 || d[2] > 0.0 {
+            return 0.0;
+        }
+        2.0 * (d[0] * d[1] + d[1] * d[2] + d[2] * d[0])
+    }
+
     #[inline(always)]
     fn box4(&self) -> Box4 {
         let b = self.0;
@@ -276,7 +290,7 @@ pub(super) fn best_sah_plane(bins: &Bins) -> Option<Plane> {
             rank -= 1;
             acc_box = acc_box.union(boxes[k]);
             acc_n += counts[k];
-            right_cost[rank % BINS] = acc_box.box4().surface_area() * blocks(acc_n);
+            right_cost[rank % BINS] = acc_box.surface_area() * blocks(acc_n);
         }
         // The plane after each occupied bin but the highest (which has nothing
         // on its right).
@@ -291,7 +305,7 @@ pub(super) fn best_sah_plane(bins: &Bins) -> Option<Plane> {
             rank += 1;
             left_box = left_box.union(boxes[k]);
             left_n += counts[k];
-            let cost = left_box.box4().surface_area() * blocks(left_n) + right_cost[rank % BINS];
+            let cost = left_box.surface_area() * blocks(left_n) + right_cost[rank % BINS];
             if cost.is_finite() && best.as_ref().is_none_or(|b| cost < b.cost) {
                 best = Some(Plane {
                     axis,
