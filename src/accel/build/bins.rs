@@ -265,7 +265,11 @@ fn goes_left(x: f32, bin: usize) -> bool {
 /// unpredictable branch per bin.
 #[inline(always)]
 pub(super) fn best_sah_plane(bins: &Bins) -> Option<Plane> {
-    let mut best: Option<Plane> = None;
+    // The best plane so far as selects, not a branch, whose outcome at each plane no
+    // predictor learns: infinity until a plane, so that `cost < best_cost` is also the
+    // test that the cost is finite (costs are never below zero; NaN fails it).
+    let mut best_cost = f32::INFINITY;
+    let (mut best_axis, mut best_bin) = (0, 0);
     for axis in 0..3 {
         if bins.scale[axis] == 0.0 {
             continue;
@@ -307,16 +311,17 @@ pub(super) fn best_sah_plane(bins: &Bins) -> Option<Plane> {
             left_box = left_box.union(boxes[k]);
             left_n += counts[k];
             let cost = left_box.surface_area() * blocks(left_n) + right_cost[rank % BINS];
-            if cost.is_finite() && best.as_ref().is_none_or(|b| cost < b.cost) {
-                best = Some(Plane {
-                    axis,
-                    bin: k + 1,
-                    cost,
-                });
-            }
+            let better = cost < best_cost;
+            best_cost = if better { cost } else { best_cost };
+            best_axis = if better { axis } else { best_axis };
+            best_bin = if better { k + 1 } else { best_bin };
         }
     }
-    best
+    (best_cost < f32::INFINITY).then_some(Plane {
+        axis: best_axis,
+        bin: best_bin,
+        cost: best_cost,
+    })
 }
 
 /// In-place partition by `plane`; returns how many primitives go left (now at
