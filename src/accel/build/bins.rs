@@ -42,10 +42,11 @@ impl BinBox {
         self
     }
 
-    /// [`Box4::surface_area`] of [`BinBox::box4`], bit for bit, without negating the
-    /// upper corner: a lower plus a negated upper coordinate is `lo - hi`, exactly the
-    /// extent negated (IEEE rounding is symmetric), so the products and sums are the
-    /// extent's, and it is positive exactly where `lo > hi` (an empty axis).
+    /// [`Box4::surface_area`] of [`BinBox::box4`], bit for bit (a NaN's sign aside: a
+    /// NaN cost never wins), without negating the upper corner: a lower plus a negated
+    /// upper coordinate is `lo - hi`, exactly the extent negated (IEEE rounding is
+    /// symmetric), so the products and sums are the extent's, and it is positive
+    /// exactly where `lo > hi` (an empty axis).
     #[inline(always)]
     fn surface_area(&self) -> f32 {
         let b = self.0;
@@ -511,6 +512,34 @@ mod tests {
             xs.push(i as f32 * 0.0017);
         }
         xs
+    }
+
+    #[test]
+    fn bin_box_area_is_box4_area_bit_for_bit_or_both_nan() {
+        // Every pair of corner coordinates from awkward values, per axis: boxes empty
+        // on any one axis, flat, infinite, signed zeros, NaN.
+        let values = [
+            -1e30f32,
+            -2.5,
+            -0.0,
+            0.0,
+            1e-40,
+            0.75,
+            3.0,
+            f32::INFINITY,
+            f32::NEG_INFINITY,
+            f32::NAN,
+        ];
+        let mut rng = Lcg(0x5851_f42d_4c95_7f2d);
+        for _ in 0..50_000 {
+            let mut pick = || values[rng.below(values.len() as u32) as usize];
+            let min: Lanes = [pick(), pick(), pick(), 0.0];
+            let max: Lanes = [pick(), pick(), pick(), 0.0];
+            let b = Box4 { min, max };
+            let (got, want) = (BinBox::of(b).surface_area(), b.surface_area());
+            let same = got.to_bits() == want.to_bits() || (got.is_nan() && want.is_nan());
+            assert!(same, "{min:?} {max:?}: {got} for {want}");
+        }
     }
 
     #[test]
