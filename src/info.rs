@@ -95,18 +95,18 @@ pub fn describe(renderer: &mut Renderer) -> Result<String> {
         );
     }
     let wide = &geometry.tri_wide;
-    if !wide.prims.is_empty() {
+    if wide.triangles > 0 {
         // Per flattened triangle: where the accel memory goes.
-        let per = |bytes: usize| bytes as f64 / wide.prims.len() as f64;
-        let padding = wide.leaves.groups.len() * LANES - wide.prims.len();
+        let per = |bytes: usize| bytes as f64 / wide.triangles as f64;
+        let padding = wide.leaves.groups.len() * LANES - wide.triangles;
         let _ = writeln!(
             o,
-            "  wide BVH      per flattened triangle: nodes {:.1}, leaf vertices {:.1} ({:.1} of it NaN padding), leaf starts {:.1}, indices {:.1}",
+            "  wide BVH      per flattened triangle: nodes {:.1}, leaf vertices {:.1} ({:.1} of it NaN padding), indices {:.1} ({:.1} of it padding)",
             per(size_of_val(wide.nodes.as_slice())),
             per(size_of_val(wide.leaves.groups.as_slice())),
             per(padding * size_of::<TriGroup>() / LANES),
-            per(size_of_val(wide.leaves.first.as_slice())),
-            per(size_of_val(wide.prims.as_slice())),
+            per(size_of_val(wide.leaves.prims.as_slice())),
+            per(padding * size_of::<u32>()),
         );
     }
     let sampler = ron::to_string(&renderer.settings().sampler).unwrap_or_default();

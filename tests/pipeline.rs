@@ -111,7 +111,7 @@ fn a_render_keeps_only_the_wide_triangle_bvh() {
     let g = r.world.resource::<SceneGeometry>();
     assert!(g.tri_bvh.nodes.is_empty() && g.tri_bvh.prim_indices.is_empty());
     g.tri_wide.validate(&g.all_positions()).unwrap();
-    assert_eq!(g.tri_wide.prims.len(), 34);
+    assert_eq!(g.tri_wide.triangles, 34);
     let entry = r
         .plan()
         .entries

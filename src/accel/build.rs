@@ -18,7 +18,7 @@
 use glam::Vec3;
 use multiversion::multiversion;
 use rayon::prelude::*;
-use wide::{f32x4, f32x8};
+use wide::f32x4;
 
 use super::Aabb;
 use super::bvh::{Bvh, BvhNode, SplitMethod};
@@ -153,9 +153,9 @@ impl PrimRef {
 
     /// The box as a [`BinBox`] grows by (the index's lane negated, which no one reads).
     #[inline(always)]
-    fn flipped(&self) -> f32x8 {
+    fn flipped(&self) -> [f32; 8] {
         let (lo, hi) = (self.lo, self.hi);
-        f32x8::new([lo[0], lo[1], lo[2], lo[3], -hi[0], -hi[1], -hi[2], -hi[3]])
+        [lo[0], lo[1], lo[2], lo[3], -hi[0], -hi[1], -hi[2], -hi[3]]
     }
 
     /// [`PrimRef::centroid`] in a SIMD register (`addps`, `mulps`: the same values).

@@ -124,7 +124,7 @@ impl TwoLevelBvh {
     pub fn triangles_drawn(&self) -> u64 {
         self.instances
             .iter()
-            .map(|i| self.meshes[i.mesh as usize].prims.len() as u64)
+            .map(|i| self.meshes[i.mesh as usize].triangles as u64)
             .sum()
     }
 

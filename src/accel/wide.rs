@@ -15,7 +15,7 @@
 //! same t is met first.
 
 use super::bvh::{Bvh, MAX_DEPTH};
-use super::leaf::{LANES, LeafTris, groups_for, leaf_count};
+use super::leaf::{LANES, LeafTris, NO_PRIM, groups_for};
 use super::wide_node::{EMPTY, RayBoxes, collapse_node, leaf_lanes};
 pub use super::wide_node::{WIDTH, WideNode};
 use super::wide_query::LeafVisitor;
@@ -28,10 +28,11 @@ use glam::Vec3;
 pub struct WideBvh {
     /// Nodes, each after its parent; empty for no triangles.
     pub nodes: Vec<WideNode>,
-    /// Triangle vertices in leaf order, in groups of `leaf::LANES`.
+    /// Triangle vertices in leaf order, in groups of `leaf::LANES`, and the caller's
+    /// index of each.
     pub leaves: LeafTris,
-    /// The caller's index of each triangle slot, in leaf order.
-    pub prims: Vec<u32>,
+    /// Triangles held (lanes that are not padding).
+    pub triangles: usize,
     /// Bounds of everything.
     pub bounds: Aabb,
     /// Levels of nodes below the root's (at most the binary tree's depth).
@@ -65,18 +66,6 @@ impl WideBvh {
     /// largest-area interior grandchildren in place of their parents; leaves and
     /// their triangle order are the binary tree's.
     pub fn collapse(bvh: &Bvh, positions: &[[Vec3; 3]]) -> WideBvh {
-        WideBvh::collapse_with(bvh, bvh.prim_indices.clone(), positions)
-    }
-
-    /// [`WideBvh::collapse`] of a binary tree not kept after it: its `prim_indices`
-    /// move into `prims` instead of being copied.
-    pub fn collapse_owned(mut bvh: Bvh, positions: &[[Vec3; 3]]) -> WideBvh {
-        let prims = std::mem::take(&mut bvh.prim_indices);
-        WideBvh::collapse_with(&bvh, prims, positions)
-    }
-
-    /// [`WideBvh::collapse`] with the binary tree's `prim_indices` given as `prims`.
-    fn collapse_with(bvh: &Bvh, prims: Vec<u32>, positions: &[[Vec3; 3]]) -> WideBvh {
         if bvh.nodes.is_empty() {
             return WideBvh::default();
         }
@@ -89,14 +78,14 @@ impl WideBvh {
         let mut leaves = LeafTris::with_capacity(groups);
         let mut nodes = Vec::with_capacity(wide_node_estimate(bvh.nodes.len()));
         let depth = collapse_node(bvh, 0, 0, &mut nodes, &mut |slot, count| {
-            leaves.push_leaf(slot, count, &prims, positions)
+            leaves.push_leaf(slot, count, &bvh.prim_indices, positions)
         })
         .1;
         nodes.shrink_to_fit();
         WideBvh {
             nodes,
             leaves,
-            prims,
+            triangles: bvh.prim_indices.len(),
             bounds: bvh.bounds(),
             depth,
         }
@@ -104,16 +93,14 @@ impl WideBvh {
 
     /// Bytes held: nodes, triangles and indices.
     pub fn bytes(&self) -> usize {
-        size_of_val(self.nodes.as_slice())
-            + self.leaves.bytes()
-            + size_of_val(self.prims.as_slice())
+        size_of_val(self.nodes.as_slice()) + self.leaves.bytes()
     }
 
     /// The caller's index of the triangle in lane `lane` of group `group` (a lane
     /// holding a triangle, not padding).
     #[inline(always)]
     pub fn prim_at(&self, group: usize, lane: usize) -> u32 {
-        self.prims[self.leaves.first[group] as usize + lane]
+        self.leaves.prims[group * LANES + lane]
     }
 
     /// The vertices of the triangle at `lane` (`group * LANES + lane`, as
@@ -127,14 +114,10 @@ impl WideBvh {
     /// Where each of the caller's triangles sits in `leaves` (`group * LANES + lane`):
     /// computed, not held, as a render reaches a triangle's vertices through its hit.
     pub fn prim_lanes(&self) -> Vec<u32> {
-        let mut lanes = vec![0; self.prims.len()];
-        for node in &self.nodes {
-            for lane in 0..WIDTH {
-                let (group, (count, _)) = (node.child[lane] as usize, leaf_count(node.count[lane]));
-                for i in 0..count {
-                    let slot = self.leaves.first[group] as usize + i;
-                    lanes[self.prims[slot] as usize] = (group * LANES + i) as u32;
-                }
+        let mut lanes = vec![0; self.triangles];
+        for (lane, &p) in self.leaves.prims.iter().enumerate() {
+            if p != NO_PRIM {
+                lanes[p as usize] = lane as u32;
             }
         }
         lanes
@@ -298,17 +281,17 @@ impl WideBvh {
     }
 
     /// Checks every structural invariant against the triangles it was built from;
-    /// Err names the first violation. Invariants: `prims` is a permutation of
-    /// `0..positions.len()`; every node is reached once from the root and after its
-    /// parent; leaves are non-empty, own their triangle groups and cover the slots of
-    /// `prims` without gaps or overlap, slot `k` holding `positions[prims[k]]` and
-    /// padding lanes NaN; every group belongs to a leaf; a child box contains its
+    /// Err names the first violation. Invariants: every node is reached once from the
+    /// root and after its parent; leaves are non-empty and own their triangle groups,
+    /// a lane holding triangle `p` holding `positions[p]`, padding lanes NaN and
+    /// [`NO_PRIM`]; each of `0..positions.len()` is in one lane, and `triangles` counts
+    /// them; every group belongs to a leaf; a child box contains its
     /// node's children's boxes, a leaf box its triangles; `bounds` contains the root's
     /// children; unused slots have no box; no node lies deeper than `depth`.
     pub fn validate(&self, positions: &[[Vec3; 3]]) -> Result<(), String> {
         let n = positions.len();
-        if self.prims.len() != n {
-            return Err(format!("{} prims for {n} triangles", self.prims.len()));
+        if self.triangles != n {
+            return Err(format!("{} triangles counted for {n}", self.triangles));
         }
         if self.nodes.is_empty() {
             return if n == 0 {
@@ -317,16 +300,9 @@ impl WideBvh {
                 Err(format!("no nodes for {n} triangles"))
             };
         }
-        let mut seen = vec![false; n];
-        for (k, &p) in self.prims.iter().enumerate() {
-            let Some(s) = seen.get_mut(p as usize).filter(|s| !**s) else {
-                return Err(format!("prims[{k}] = {p} is out of range or repeated"));
-            };
-            *s = true;
-        }
         let mut used = vec![false; self.leaves.groups.len()];
         let mut reached = vec![false; self.nodes.len()];
-        let mut covered = vec![false; n];
+        let mut seen = vec![false; n];
         if self.depth > MAX_DEPTH {
             return Err(format!("depth {} exceeds {MAX_DEPTH}", self.depth));
         }
@@ -361,15 +337,18 @@ impl WideBvh {
                     stack.push((c, b, depth + 1));
                     continue;
                 }
-                let leaf = |k: usize, tri: [Vec3; 3]| {
-                    if k >= n || std::mem::replace(&mut covered[k], true) {
-                        return Err(format!("triangle slot {k} past the end or in two leaves"));
-                    }
-                    if tri != positions[self.prims[k] as usize] {
-                        return Err(format!("slot {k} is not triangle {}", self.prims[k]));
+                let leaf = |p: u32, tri: [Vec3; 3]| {
+                    let Some(s) = seen.get_mut(p as usize).filter(|s| !**s) else {
+                        return Err(format!("triangle {p} out of range or in two lanes"));
+                    };
+                    *s = true;
+                    if tri != positions[p as usize] {
+                        return Err(format!("a lane of triangle {p} holds other vertices"));
                     }
                     if !b.contains_box(&Aabb::from_points(&tri)) {
-                        return Err(format!("node {i} lane {lane}: slot {k} outside the box"));
+                        return Err(format!(
+                            "node {i} lane {lane}: triangle {p} outside the box"
+                        ));
                     }
                     Ok(())
                 };
@@ -381,8 +360,8 @@ impl WideBvh {
         if let Some(i) = reached.iter().position(|r| !r) {
             return Err(format!("node {i} is unreachable"));
         }
-        if let Some(k) = covered.iter().position(|c| !c) {
-            return Err(format!("triangle slot {k} is in no leaf"));
+        if let Some(p) = seen.iter().position(|s| !s) {
+            return Err(format!("triangle {p} is in no leaf"));
         }
         if let Some(g) = used.iter().position(|u| !u) {
             return Err(format!("triangle group {g} is in no leaf"));

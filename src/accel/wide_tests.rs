@@ -1,7 +1,7 @@
 //! Tests of the wide BVH against the binary tree and brute force.
 
 use super::*;
-use crate::accel::leaf::DEGENERATE;
+use crate::accel::leaf::{DEGENERATE, NO_PRIM};
 use crate::accel::triangle::{RayShear, TriangleHit, intersect_triangle_sheared};
 use crate::accel::{BvhNode, SplitMethod};
 use crate::test_util::Lcg;
@@ -116,6 +116,37 @@ fn validate_catches_a_shrunken_box_and_a_wrong_triangle() {
         axis[3] = axis[0];
     }
     assert!(bad.validate(&tris).is_err());
+}
+
+#[test]
+fn validate_catches_a_wrong_triangle_index_in_a_lane() {
+    let tris = random_tris(500, 4);
+    let (_, wide) = both(&tris, SplitMethod::SahBinned);
+    wide.validate(&tris).unwrap();
+    let prims = &wide.leaves.prims;
+    let padding = prims.iter().position(|&p| p == NO_PRIM).unwrap();
+    let mut broken = Vec::new();
+    // Two lanes' indices swapped: each names the other's vertices.
+    let mut bad = wide.clone();
+    bad.leaves.prims.swap(0, 1);
+    broken.push(bad);
+    // A padding lane naming a triangle, a triangle's lane naming none.
+    let mut bad = wide.clone();
+    bad.leaves.prims[padding] = prims[0];
+    broken.push(bad);
+    let mut bad = wide.clone();
+    bad.leaves.prims[0] = NO_PRIM;
+    broken.push(bad);
+    // One lane too few, a wrong count.
+    let mut bad = wide.clone();
+    bad.leaves.prims.pop();
+    broken.push(bad);
+    let mut bad = wide.clone();
+    bad.triangles -= 1;
+    broken.push(bad);
+    for (i, bad) in broken.iter().enumerate() {
+        assert!(bad.validate(&tris).is_err(), "case {i}");
+    }
 }
 
 #[test]
@@ -533,7 +564,7 @@ fn the_collapse_groups_leaves_in_slot_order() {
         let (bvh, wide) = both(&tris, split);
         let (nodes, leaves) = reference_leaves(&bvh, &tris);
         assert_eq!(wide.nodes, nodes);
-        assert_eq!(wide.leaves.first, leaves.first);
+        assert_eq!(wide.leaves.prims, leaves.prims);
         let bits = |l: &LeafTris| -> Vec<u32> {
             let v = l
                 .groups

@@ -12,7 +12,7 @@ use glam::{Vec2, Vec3};
 use super::crossings::Crossings;
 use super::materials::Materials;
 use super::plan::RenderPlan;
-use crate::accel::leaf::LANES;
+use crate::accel::leaf::NO_PRIM;
 use crate::accel::sphere::{sphere_roots, sphere_uv};
 use crate::accel::triangle::{RayShear, TriangleHit, intersect_triangle_sheared};
 use crate::accel::{
@@ -198,7 +198,7 @@ pub fn build_triangle_bvh(
         g.tri_bvh = bvh;
         g.collapse_triangle_bvh(&positions);
     } else {
-        g.tri_wide = WideBvh::collapse_owned(bvh, &positions);
+        g.tri_wide = WideBvh::collapse(&bvh, &positions);
     }
     drop(positions);
     let bottom: Vec<WideBvh> = g
@@ -206,7 +206,7 @@ pub fn build_triangle_bvh(
         .iter()
         .map(|data| object_bvh(data, &settings))
         .collect();
-    let stored: usize = bottom.iter().map(|b| b.prims.len()).sum();
+    let stored: usize = bottom.iter().map(|b| b.triangles).sum();
     g.instanced = TwoLevelBvh::new(bottom, instances, split_method(&settings));
     stats.record(Stage::BuildTriangleBvh, (flattened + stored) as u64);
 }
@@ -229,7 +229,7 @@ fn object_bvh(data: &MeshData, settings: &Settings) -> WideBvh {
         .map(|t| t.map(|i| v[i as usize].position))
         .collect();
     let bounds: Vec<Aabb> = positions.iter().map(|p| Aabb::from_points(p)).collect();
-    WideBvh::collapse_owned(build(&bounds, settings), &positions)
+    WideBvh::collapse(&build(&bounds, settings), &positions)
 }
 
 /// Gathers the spheres and builds their BVH.
@@ -274,15 +274,12 @@ impl SceneGeometry {
         if let Some(&lane) = self.tri_lanes.get(prim as usize) {
             return lane;
         }
-        let wide = &self.tri_wide;
-        let slot = wide
-            .prims
-            .iter()
-            .position(|&p| p == prim)
+        // Padding lanes hold `NO_PRIM`, which is no triangle's index.
+        (prim != NO_PRIM)
+            .then(|| self.tri_wide.leaves.prims.iter().position(|&p| p == prim))
+            .flatten()
             .unwrap_or_else(|| panic!("triangle {prim} is not in the scene's wide BVH"))
-            as u32;
-        let group = wide.leaves.first.partition_point(|&f| f <= slot) - 1;
-        (group * LANES) as u32 + slot - wide.leaves.first[group]
+            as u32
     }
 
     /// The vertices of flattened triangle `prim`.
@@ -298,7 +295,7 @@ impl SceneGeometry {
 
     /// Flattened triangles (those of meshes used once).
     pub fn triangles_flattened(&self) -> usize {
-        self.tri_wide.prims.len()
+        self.tri_wide.triangles
     }
 
     /// Whether queries observed by `V` traverse the wide triangle BVH: unobserved ones,
@@ -493,7 +490,7 @@ impl SceneGeometry {
 
     /// Triangles stored: the flattened ones and each instanced mesh's once.
     pub fn triangles_stored(&self) -> u64 {
-        let instanced: usize = self.instanced.meshes.iter().map(|m| m.prims.len()).sum();
+        let instanced: usize = self.instanced.meshes.iter().map(|m| m.triangles).sum();
         (self.triangles_flattened() + instanced) as u64
     }
 
