@@ -377,7 +377,7 @@ fn shade_chunks<O: LightObserver, M: Model>(
     radiance: &mut Vec<Vec3>,
     shadow_rays: &mut ShadowQueue,
 ) -> O {
-    radiance.clear();
+    // Every entry is written below: only entries the buffer lacks are made (and zeroed).
     radiance.resize(rays.len(), Vec3::ZERO);
     let chunk_shadows = shadow_rays.start(rays.len().div_ceil(CHUNK));
     let observers: Vec<O> = rays
