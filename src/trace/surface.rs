@@ -135,6 +135,13 @@ pub const MIN_OFFSET_COORDINATE: f32 = 7.888_609e-31;
 /// A ray origin just off the surface at `p`, on the side of `ng` that `w` points to.
 pub fn offset_ray_origin(p: Vec3, p_error: Vec3, ng: Vec3, w: Vec3) -> Vec3 {
     let side = if w.dot(ng) < 0.0 { -ng } else { ng };
+    offset_ray_origin_towards(p, p_error, ng, side)
+}
+
+/// [`offset_ray_origin`] with its side given: `side` is `ng` or `-ng`, the one `w` is on.
+/// With `w = ng` the side is `ng` itself (`ng.ng`, a sum of squares or NaN, is never
+/// below 0), so a shadow ray's origin needs no test of it.
+pub fn offset_ray_origin_towards(p: Vec3, p_error: Vec3, ng: Vec3, side: Vec3) -> Vec3 {
     let mut po = p + ng.abs().dot(p_error) * side;
     // Round away from the surface, so the origin leaves it even where the error bound
     // is zero (a plane through the origin of an axis) and the addition rounds back.
@@ -167,7 +174,7 @@ impl Surface {
         let d = incoming.normalize();
         let r = (d - 2.0 * d.dot(self.n) * self.n).normalize();
         Ray {
-            origin: offset_ray_origin(self.p, self.p_error, self.ng, self.ng),
+            origin: offset_ray_origin_towards(self.p, self.p_error, self.ng, self.ng),
             dir: r,
         }
     }

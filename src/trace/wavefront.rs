@@ -16,7 +16,7 @@ use super::log::{HitObserver, LightObserver, RayTrace, TraceLog};
 use super::materials::Materials;
 use super::plan::RenderPlan;
 pub use super::shadow::{CHUNK, ShadowQueue, ShadowRay};
-use super::surface::{SHADOW_EPSILON, Surface, offset_ray_origin, surface_at};
+use super::surface::{SHADOW_EPSILON, Surface, offset_ray_origin_towards, surface_at};
 use crate::accel::Ray;
 use crate::sampling::{Sampler, pixel_mode, pixel_sample_offset, samples_taken};
 use crate::scene::{Camera, PixelSampling, Settings};
@@ -285,7 +285,8 @@ struct ShadowOrigin(Vec3);
 
 impl ShadowOrigin {
     fn of(surface: &Surface) -> Self {
-        Self(offset_ray_origin(
+        // `offset_ray_origin(.., ng, w = ng)` without its test of the side (always `ng`).
+        Self(offset_ray_origin_towards(
             surface.p,
             surface.p_error,
             surface.ng,
@@ -376,7 +377,7 @@ fn shade_chunks<O: LightObserver, M: Model>(
     radiance: &mut Vec<Vec3>,
     shadow_rays: &mut ShadowQueue,
 ) -> O {
-    radiance.clear();
+    // Every entry is written below: only entries the buffer lacks are made (and zeroed).
     radiance.resize(rays.len(), Vec3::ZERO);
     let chunk_shadows = shadow_rays.start(rays.len().div_ceil(CHUNK));
     let observers: Vec<O> = rays
@@ -611,6 +612,8 @@ mod tests {
                 Vec3::new(0.6, -0.8, 0.0),
             ),
             (Vec3::ZERO, Vec3::ZERO, Vec3::new(0.0, 0.0, -1.0)),
+            // A NaN normal (bad input): its side is still `ng`, as `offset_ray_origin` finds.
+            (Vec3::ONE, Vec3::ZERO, Vec3::new(f32::NAN, -1.0, 0.0)),
         ] {
             let surface = Surface {
                 p,
