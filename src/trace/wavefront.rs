@@ -501,13 +501,20 @@ pub fn trace_shadow_rays(
             s.contribution * geometry.transmittance(&s.ray, t_max, &materials, &mut ())
         });
     } else {
-        wf.shadow_rays.trace(&mut wf.ray_radiance, |s| {
-            if geometry.occluded(&s.ray, t_max, &mut ()) {
-                Vec3::ZERO
-            } else {
-                s.contribution
-            }
-        });
+        // Consecutive shadow rays (of neighbouring pixels, to the same light) as packets.
+        wf.shadow_rays
+            .trace_packets(&mut wf.ray_radiance, |rays, arrived| {
+                let packet: [Ray; crate::accel::PACKET] =
+                    std::array::from_fn(|i| rays[i.min(rays.len() - 1)].ray);
+                let blocked = geometry.occluded_packet(&packet[..rays.len()], t_max);
+                for (i, (s, a)) in rays.iter().zip(arrived).enumerate() {
+                    *a = if blocked & (1 << i) != 0 {
+                        Vec3::ZERO
+                    } else {
+                        s.contribution
+                    };
+                }
+            });
     }
     let n = wf.shadow_rays.len() as u64;
     stats.record(Stage::TraceShadowRays, n);
