@@ -39,6 +39,12 @@ type Lanes = [f32; PACKET];
 /// Traversal stack entries any tree needs (as the single-ray traversal's).
 const STACK_SIZE: usize = (WIDTH - 1) * MAX_DEPTH as usize + 1;
 
+/// The lanes of `node` holding a child.
+#[inline(always)]
+fn used_lanes(node: &WideNode) -> u32 {
+    !u32x8::from(node.child).simd_eq(u32x8::splat(EMPTY)).to_bitmask() & ((1 << WIDTH) - 1)
+}
+
 /// Bits of the first `n` rays of a packet.
 #[inline(always)]
 fn first_lanes(n: usize) -> u32 {
@@ -46,7 +52,7 @@ fn first_lanes(n: usize) -> u32 {
 }
 
 /// The per-ray constants of a packet, one lane per ray; lanes past the packet's rays
-/// repeat its first ray (never active).
+/// hold zeros and the first ray's shear (never active).
 pub(super) struct PacketRays {
     /// Origin, world axes.
     origin: [Lanes; 3],
@@ -79,25 +85,23 @@ impl PacketRays {
             rays.len(),
             t_max.len()
         );
-        let ray = |r: usize| &rays[r.min(rays.len() - 1)];
-        let shears: [RayShear; PACKET] = std::array::from_fn(|r| RayShear::new(ray(r)));
         let mut p = PacketRays {
             origin: [[0.0; PACKET]; 3],
             inv_dir: [[0.0; PACKET]; 3],
-            cull: std::array::from_fn(|r| t_max[r.min(rays.len() - 1)]),
+            cull: [0.0; PACKET],
             bound: [0.0; PACKET],
-            sx: shears.map(|s| s.sx),
-            sy: shears.map(|s| s.sy),
-            sz: shears.map(|s| s.sz),
+            sx: [0.0; PACKET],
+            sy: [0.0; PACKET],
+            sz: [0.0; PACKET],
             origin_k: [[0.0; PACKET]; 3],
-            shears,
-            origins: std::array::from_fn(|r| ray(r).origin),
+            shears: [RayShear::new(&rays[0]); PACKET],
+            origins: [rays[0].origin; PACKET],
             len: rays.len(),
         };
-        p.bound = p.cull;
-        for r in 0..PACKET {
-            let (o, inv) = (ray(r).origin.to_array(), ray(r).dir.recip().to_array());
-            let s = &p.shears[r];
+        // Lanes past the rays keep zeros and the first ray's shear (never active).
+        for (r, (ray, &t_max)) in rays.iter().zip(t_max).enumerate() {
+            let s = RayShear::new(ray);
+            let (o, inv) = (ray.origin.to_array(), ray.dir.recip().to_array());
             for axis in 0..3 {
                 p.origin[axis][r] = o[axis];
                 p.inv_dir[axis][r] = inv[axis];
@@ -105,6 +109,9 @@ impl PacketRays {
             for (k, axis) in [s.kx, s.ky, s.kz].into_iter().enumerate() {
                 p.origin_k[k][r] = o[axis];
             }
+            (p.sx[r], p.sy[r], p.sz[r]) = (s.sx, s.sy, s.sz);
+            (p.cull[r], p.bound[r]) = (t_max, t_max);
+            (p.shears[r], p.origins[r]) = (s, ray.origin);
         }
         p
     }
@@ -333,10 +340,7 @@ impl WideBvh {
                 continue;
             }
             let node = &self.nodes[index as usize];
-            let mut used = 0u32;
-            for c in 0..WIDTH {
-                used |= ((node.child[c] != EMPTY) as u32) << c;
-            }
+            let used = used_lanes(node);
             let mut hits = [0u32; WIDTH];
             let mut lanes = used;
             while lanes != 0 {
@@ -427,10 +431,10 @@ impl WideBvh {
             let mut hits = [0u32; WIDTH];
             // The children met, nearest first.
             let mut order: ArrayVec<u64, WIDTH> = ArrayVec::new();
-            for c in 0..WIDTH {
-                if node.child[c] == EMPTY {
-                    continue;
-                }
+            let mut lanes = used_lanes(node);
+            while lanes != 0 {
+                let c = lanes.trailing_zeros() as usize;
+                lanes &= lanes - 1;
                 let (t, h) = p.test_box(node, c);
                 let h = h & mask;
                 if h == 0 {
