@@ -235,6 +235,32 @@ fn closest_hits<O: HitObserver>(
     observers
 }
 
+/// [`closest_hits`] unobserved, with consecutive rays (of neighbouring pixels) traced
+/// as packets (`SceneGeometry::intersect_packet`): the same hits.
+fn closest_hits_in_packets(
+    geometry: &SceneGeometry,
+    rays: &[QueuedRay],
+    interpolate: bool,
+    surfaces: &mut Vec<Option<Surface>>,
+) {
+    use crate::accel::PACKET;
+    surfaces.clear();
+    surfaces.resize_with(rays.len(), || None);
+    surfaces
+        .par_chunks_mut(PACKET)
+        .zip(rays.par_chunks(PACKET))
+        .with_min_len(CHUNK / PACKET)
+        .for_each(|(surfaces, rays)| {
+            let packet: [Ray; PACKET] = std::array::from_fn(|i| rays[i.min(rays.len() - 1)].ray);
+            let mut hits = [None; PACKET];
+            let n = rays.len();
+            geometry.intersect_packet(&packet[..n], f32::INFINITY, &mut hits[..n]);
+            for ((s, q), hit) in surfaces.iter_mut().zip(rays).zip(hits) {
+                *s = hit.map(|h| surface_at(geometry, &q.ray, &h, interpolate));
+            }
+        });
+}
+
 /// Finds each ray's closest hit and builds its shading point; with a [`TraceLog`], also
 /// keeps each ray's traversal.
 pub fn intersect_rays(
@@ -249,7 +275,7 @@ pub fn intersect_rays(
     // Into the last depth's buffer: its allocation is reused.
     match log {
         None => {
-            closest_hits::<()>(&geometry, &wf.rays, interpolate, &mut wf.hits);
+            closest_hits_in_packets(&geometry, &wf.rays, interpolate, &mut wf.hits);
         }
         Some(mut log) => {
             log.rays = closest_hits::<RayTrace>(&geometry, &wf.rays, interpolate, &mut wf.hits);
