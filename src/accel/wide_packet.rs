@@ -25,8 +25,8 @@ use glam::Vec3;
 use wide::u32x8;
 
 use super::bvh::MAX_DEPTH;
-use super::leaf::{LANES, TriGroup, groups_for, leaf_count};
-use super::triangle::{RayShear, TriangleHit, intersect_triangle_flagged};
+use super::leaf::{LANES, TriGroup, clear_of_zero, groups_for, leaf_count};
+use super::triangle::{RayShear, TriangleHit, intersect_triangle_flagged, is_degenerate};
 use super::wide_node::{EMPTY, WIDTH, WideNode, leaf_lanes};
 use super::{BOX_MARGIN, Ray, WideBvh};
 
@@ -42,7 +42,10 @@ const STACK_SIZE: usize = (WIDTH - 1) * MAX_DEPTH as usize + 1;
 /// The lanes of `node` holding a child.
 #[inline(always)]
 fn used_lanes(node: &WideNode) -> u32 {
-    !u32x8::from(node.child).simd_eq(u32x8::splat(EMPTY)).to_bitmask() & ((1 << WIDTH) - 1)
+    !u32x8::from(node.child)
+        .simd_eq(u32x8::splat(EMPTY))
+        .to_bitmask()
+        & ((1 << WIDTH) - 1)
 }
 
 /// Bits of the first `n` rays of a packet.
@@ -162,7 +165,23 @@ impl PacketRays {
     /// triangle in the lanes' place, the same f32 operations in the same order (bit
     /// clear only when the scalar test rejects the ray before its division).
     #[inline(always)]
-    fn prefilter(&self, g: &TriGroup, l: usize, [kx, ky, kz]: [usize; 3]) -> u32 {
+    fn prefilter(&self, g: &TriGroup, l: usize, axes: [usize; 3]) -> u32 {
+        self.candidates(g, l, axes).mask
+    }
+
+    /// [`Self::prefilter`] with each ray's values of the scalar test (`Candidates`'s,
+    /// rays in the lanes' place), so that most kept rays need not run it.
+    #[inline(always)]
+    fn candidates(&self, g: &TriGroup, l: usize, [kx, ky, kz]: [usize; 3]) -> PacketCandidates {
+        let mut out = PacketCandidates {
+            mask: 0,
+            zero: 0,
+            e: [[0.0; PACKET]; 3],
+            det: [0.0; PACKET],
+            t_scaled: [0.0; PACKET],
+            sizes: [[0.0; PACKET]; 3],
+        };
+        let mut zeros = [0u32; PACKET];
         let v = &g.v;
         let p = |k: usize| [v[k][kx][l], v[k][ky][l], v[k][kz][l]];
         let (a, b, c) = (p(0), p(1), p(2));
@@ -196,8 +215,18 @@ impl PacketRays {
             let inside = (signed_t > 0.0) & (signed_t < bound);
             let keep = zero | (!mixed & inside);
             *bit = (keep as u32).wrapping_neg();
+            zeros[r] = (zero as u32).wrapping_neg();
+            [out.e[0][r], out.e[1][r], out.e[2][r]] = [u, v, w];
+            (out.det[r], out.t_scaled[r]) = (det, t_scaled);
+            // `Sheared::sizes`: maxps itself, as there.
+            let max = |m: f32, x: &f32| if m > x.abs() { m } else { x.abs() };
+            let pz = [a_z, b_z, c_z].iter().fold(0.0, max);
+            let s = [ax, ay, bx, by, cx, cy].iter().fold(0.0, max);
+            [out.sizes[0][r], out.sizes[1][r], out.sizes[2][r]] = [pz, s, sz.abs() * pz];
         }
-        u32x8::from(bits).to_bitmask()
+        out.mask = u32x8::from(bits).to_bitmask();
+        out.zero = u32x8::from(zeros).to_bitmask();
+        out
     }
 
     /// Tests rays `rays` (with axes `axes`) against the leaf at group `group` with the
@@ -267,14 +296,13 @@ impl PacketRays {
         for i in 0..groups_for(count) {
             let g = &wide.leaves.groups[group + i];
             for l in 0..(count - i * LANES).min(LANES) {
-                let mut kept = self.prefilter(g, l, axes) & rays;
+                let candidates = self.candidates(g, l, axes);
+                let mut kept = candidates.mask & rays;
                 while kept != 0 {
                     let r = kept.trailing_zeros() as usize;
                     kept &= kept - 1;
                     let (s, o, bound) = (&self.shears[r], self.origins[r], self.bound[r]);
-                    let Some(h) =
-                        intersect_triangle_flagged(s, o, g.triangle(l), bound, degenerate)
-                    else {
+                    let Some(h) = candidates.hit(r, g.triangle(l), degenerate, s, o, bound) else {
                         continue;
                     };
                     let p = wide.prim_at(group + i, l);
@@ -286,6 +314,69 @@ impl PacketRays {
                 }
             }
         }
+    }
+}
+
+/// The packet prefilter's answer for one triangle: `leaf::Candidates` with rays in
+/// the lanes' place.
+struct PacketCandidates {
+    /// Rays the scalar test may accept.
+    mask: u32,
+    /// Rays with an edge function exactly zero, which the scalar test redoes in f64.
+    zero: u32,
+    /// The edge functions u, v, w.
+    e: [Lanes; 3],
+    det: Lanes,
+    t_scaled: Lanes,
+    /// `Sheared::sizes` of each ray.
+    sizes: [Lanes; 3],
+}
+
+impl PacketCandidates {
+    /// The scalar test on ray `r` (in `mask`) and triangle `tri` with a bound `t_max`
+    /// at most the prefilter's: `Candidates::hit` with the ray in the lane's place (the
+    /// ray's values where they decide it, else the scalar test itself).
+    #[inline(always)]
+    fn hit(
+        &self,
+        r: usize,
+        tri: [Vec3; 3],
+        may_be_degenerate: bool,
+        shear: &RayShear,
+        origin: Vec3,
+        t_max: f32,
+    ) -> Option<TriangleHit> {
+        let scalar = || intersect_triangle_flagged(shear, origin, tri, t_max, may_be_degenerate);
+        if self.zero & (1 << r) != 0 {
+            return scalar();
+        }
+        let (det, t_scaled) = (self.det[r], self.t_scaled[r]);
+        let beyond = if det < 0.0 {
+            t_scaled <= t_max * det
+        } else {
+            t_scaled >= t_max * det
+        };
+        if beyond {
+            return None;
+        }
+        if may_be_degenerate && is_degenerate(tri[0], tri[1], tri[2]) {
+            return None;
+        }
+        let inv_det = 1.0 / det;
+        let t = t_scaled * inv_det;
+        if !(t > 0.0 && t < t_max) {
+            return None;
+        }
+        if !clear_of_zero(t, det, self.sizes.map(|s| s[r])) {
+            return scalar();
+        }
+        let [u, v, w] = self.e.map(|e| e[r]);
+        Some(TriangleHit {
+            t,
+            b0: u * inv_det,
+            b1: v * inv_det,
+            b2: w * inv_det,
+        })
     }
 }
 

@@ -30,10 +30,15 @@ fn scene() -> (Vec<Tri>, WideBvh) {
         let d = ((rng.vec() * 16.0).floor() - Vec3::splat(8.0)) / 16.0;
         tris.push([p, p + d, p + 3.0 * d]);
     }
-    let bounds: Vec<Aabb> = tris.iter().map(|t| Aabb::from_points(t)).collect();
-    let wide = WideBvh::collapse(&Bvh::build(&bounds, SplitMethod::SahBinned), &tris);
-    wide.validate(&tris).unwrap();
+    let wide = build(&tris);
     (tris, wide)
+}
+
+fn build(tris: &[Tri]) -> WideBvh {
+    let bounds: Vec<Aabb> = tris.iter().map(|t| Aabb::from_points(t)).collect();
+    let wide = WideBvh::collapse(&Bvh::build(&bounds, SplitMethod::SahBinned), tris);
+    wide.validate(tris).unwrap();
+    wide
 }
 
 /// A direction with some components exactly 0 or -0 (every fourth ray), else random.
@@ -225,6 +230,35 @@ fn ties_on_shared_edges_go_to_the_lowest_index_in_packets() {
         }
     }
     assert_eq!(check_closest(&wide, &rays), rays.len());
+}
+
+#[test]
+fn grazing_hits_near_t_zero_match_in_packets() {
+    // Packets of rays from points 10^-k off long or thin triangles far from the world
+    // origin, grazing them: hits whose f32 t lies within its rounding error of 0, which
+    // the scalar test decides again in f64 (as in leaf_tests'
+    // decided_lanes_bound_the_scalar_tests_t_error).
+    let mut rng = Lcg(17);
+    let (mut tris, mut rays) = (Vec::new(), Vec::new());
+    for i in 0..300 {
+        let far = [0.0, 10.0, 1e4][i % 3];
+        let centre = rng.vec() * 4.0 + Vec3::splat(far);
+        let thin = if i % 5 == 0 { 1e-3 } else { 1.0 };
+        let long = if i % 7 == 0 { 1e3 } else { 4.0 };
+        let (e1, e2) = (rng.dir() * long, rng.dir() * thin);
+        tris.push([centre, centre + e1, centre + e2]);
+        let n = e1.cross(e2).normalize();
+        for k in 0..8 {
+            let target = centre + e1 * rng.next_f32() * 0.5 + e2 * rng.next_f32() * 0.5;
+            let along = (e1.normalize() + n * 10f32.powi(-(k % 4))).normalize();
+            let off = n * 10f32.powi(-1 - (i as i32 + k) % 6);
+            let origin = target + off - along * 10f32.powi(-(k % 5));
+            rays.push((Ray::new(origin, along), f32::INFINITY));
+        }
+    }
+    let wide = build(&tris);
+    assert!(check_closest(&wide, &rays) > rays.len() / 2);
+    check(&wide, &rays, |r, t| wide.occluded_packet(r, t));
 }
 
 #[test]
