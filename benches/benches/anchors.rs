@@ -6,8 +6,8 @@
 //! rounds; then build times and glint's bytes per triangle.
 //!
 //! glint is the 8-wide BVH the render traverses; `glint8` the same BVH traced with
-//! packets of 8 consecutive rays (shadow rays only, as the render traces them; its
-//! ratios to Embree's single rays and 16-ray packets follow on a line of their own);
+//! packets of 8 consecutive rays, as the render traces them (its ratios to Embree's
+//! single rays and 16-ray packets follow on a line of their own);
 //! `glint-binary` is the binary
 //! tree it is collapsed from; `glint-2level`, on a model whose meshes are drawn
 //! several times (MetalRoughSpheresNoTextures), is what the render traverses there:
@@ -64,8 +64,8 @@ enum Peer<'a> {
     Embree(&'a EmbreeScene<'a>),
     /// Embree's 16-ray packets over consecutive rays of a set (what packets buy).
     Embree16(&'a EmbreeScene<'a>),
-    /// The 8-wide BVH's packets of 8 consecutive rays (`WideBvh::occluded_packet`):
-    /// shadow rays only.
+    /// The 8-wide BVH's packets of 8 consecutive rays (`WideBvh::occluded_packet`,
+    /// `WideBvh::closest_packet`).
     Glint8(&'a WideBvh),
     TinyBvh(&'a TinyBvh8),
 }
@@ -82,11 +82,6 @@ impl Peer<'_> {
             Peer::Glint8(..) => "glint8",
             Peer::TinyBvh(..) => "tinybvh8",
         }
-    }
-
-    /// Whether it traces the shadow rays (`shadow`) or the others.
-    fn traces(&self, shadow: bool) -> bool {
-        shadow || !matches!(self, Peer::Glint8(..))
     }
 
     /// Hits among `rays`: any-hit queries up to t = 1 for shadow rays, closest-hit
@@ -146,10 +141,19 @@ impl Peer<'_> {
                 let t_max = if shadow { 1.0 } else { f32::INFINITY };
                 rays.chunks(16).map(|c| s.hits16(c, shadow, t_max)).sum()
             }
-            Peer::Glint8(wide) => {
+            Peer::Glint8(wide) if shadow => {
                 let t_max = [1.0; PACKET];
                 rays.chunks(PACKET)
                     .map(|c| wide.occluded_packet(c, &t_max[..c.len()]).count_ones())
+                    .sum()
+            }
+            Peer::Glint8(wide) => {
+                let t_max = [f32::INFINITY; PACKET];
+                rays.chunks(PACKET)
+                    .map(|c| {
+                        let hits = wide.closest_packet(c, &t_max[..c.len()]);
+                        hits.iter().filter(|h| h.is_some()).count() as u32
+                    })
                     .sum()
             }
             Peer::TinyBvh(b) => count_hits(
@@ -355,9 +359,6 @@ fn bench_mesh(
         for round in 0..rounds {
             for k in 0..peers.len() {
                 let p = (round + k) % peers.len();
-                if !peers[p].traces(shadow) {
-                    continue;
-                }
                 let t = Instant::now();
                 hits[p] = black_box(peers[p].trace(rays, shadow));
                 secs[p].push(t.elapsed().as_secs_f64());
@@ -366,9 +367,6 @@ fn bench_mesh(
         let mrays = |p: usize| rays.len() as f64 / median(&mut secs[p].clone()) / 1e6;
         let mut line = format!("  {case:<10} glint {:6.2} ({})", mrays(0), hits[0]);
         for p in 1..peers.len() {
-            if !peers[p].traces(shadow) {
-                continue;
-            }
             let mut ratios: Vec<f64> = (0..rounds).map(|r| secs[p][r] / secs[0][r]).collect();
             let m = median(&mut ratios);
             line += &format!(
@@ -383,7 +381,7 @@ fn bench_mesh(
         println!("{line}");
         // The packets next to Embree's single rays and packets.
         let glint8 = peers.iter().position(|p| matches!(p, Peer::Glint8(..)));
-        if let Some(g) = glint8.filter(|_| shadow) {
+        if let Some(g) = glint8 {
             let mut line = String::from("  glint8 ÷");
             for (p, peer) in peers.iter().enumerate() {
                 if matches!(peer, Peer::Embree(..) | Peer::Embree16(..)) {
