@@ -119,6 +119,18 @@ impl PacketRays {
         p
     }
 
+    /// The rays whose permuted axes are ray `r`'s (kx and kz decide ky).
+    #[inline(always)]
+    fn same_axes(&self, r: usize) -> u32 {
+        let key = |s: &RayShear| s.kx | s.kz << 2;
+        let k = key(&self.shears[r]);
+        let mut class = 0;
+        for (i, s) in self.shears.iter().enumerate() {
+            class |= ((key(s) == k) as u32) << i;
+        }
+        class
+    }
+
     /// The permuted axes of ray `r`.
     #[inline(always)]
     fn axes(&self, r: usize) -> [usize; 3] {
@@ -401,12 +413,8 @@ impl WideBvh {
         let mut todo = first_lanes(p.len);
         let mut occluded = 0;
         while todo != 0 {
-            let axes = p.axes(todo.trailing_zeros() as usize);
-            let mut class = 0;
-            for r in 0..p.len {
-                class |= ((p.axes(r) == axes) as u32) << r;
-            }
-            class &= todo;
+            let first = todo.trailing_zeros() as usize;
+            let (axes, class) = (p.axes(first), p.same_axes(first) & todo);
             occluded |= self.occluded_sub_packet(&p, axes, class);
             todo &= !class;
         }
@@ -481,12 +489,8 @@ impl WideBvh {
         let limit = p.cull;
         let mut todo = first_lanes(p.len);
         while todo != 0 {
-            let axes = p.axes(todo.trailing_zeros() as usize);
-            let mut class = 0;
-            for r in 0..p.len {
-                class |= ((p.axes(r) == axes) as u32) << r;
-            }
-            class &= todo;
+            let first = todo.trailing_zeros() as usize;
+            let (axes, class) = (p.axes(first), p.same_axes(first) & todo);
             self.closest_sub_packet(&mut p, axes, class, &limit, &mut best);
             todo &= !class;
         }
