@@ -8,6 +8,8 @@
 # name: wildcards and --dump-after never fired here), so each ray set gets its own count, without mesh, BVH or ray
 # construction in it.
 #   scripts/callgrind_rays.sh [100k|1M|both] [RAYS]   (defaults 100k, 65536)
+# With GLINT_RAYS_PACKETS=1 in the environment, every row traces packets of 8
+# consecutive rays (WideBvh::occluded_packet, closest_packet) instead of single rays.
 # Under valgrind the AVX2 + FMA clone of the queries runs when the host CPU
 # has them, as natively.
 set -euo pipefail

@@ -5,7 +5,10 @@
 //! Mrays/s and the ratio glint ÷ peer as the median and the range over the
 //! rounds; then build times and glint's bytes per triangle.
 //!
-//! glint is the 8-wide BVH the render traverses; `glint-binary` is the binary
+//! glint is the 8-wide BVH the render traverses; `glint8` the same BVH traced with
+//! packets of 8 consecutive rays, as the render traces them (its ratios to Embree's
+//! single rays and 16-ray packets follow on a line of their own);
+//! `glint-binary` is the binary
 //! tree it is collapsed from; `glint-2level`, on a model whose meshes are drawn
 //! several times (MetalRoughSpheresNoTextures), is what the render traverses there:
 //! the 8-wide BVH of the meshes drawn once and the two-level BVH of the instances
@@ -24,7 +27,7 @@ use std::hint::black_box;
 use std::time::{Duration, Instant};
 
 use glam::{Vec3, Vec3A};
-use glint::accel::{Aabb, Bvh, Ray, SplitMethod, TwoLevelBvh, WideBvh};
+use glint::accel::{Aabb, Bvh, PACKET, Ray, SplitMethod, TwoLevelBvh, WideBvh};
 use glint_bench::embree::{Embree, EmbreeScene};
 use glint_bench::tinybvh::TinyBvh8;
 use glint_bench::{
@@ -61,6 +64,9 @@ enum Peer<'a> {
     Embree(&'a EmbreeScene<'a>),
     /// Embree's 16-ray packets over consecutive rays of a set (what packets buy).
     Embree16(&'a EmbreeScene<'a>),
+    /// The 8-wide BVH's packets of 8 consecutive rays (`WideBvh::occluded_packet`,
+    /// `WideBvh::closest_packet`).
+    Glint8(&'a WideBvh),
     TinyBvh(&'a TinyBvh8),
 }
 
@@ -73,6 +79,7 @@ impl Peer<'_> {
             Peer::Obvhs(..) => "obvhs",
             Peer::Embree(..) => "embree",
             Peer::Embree16(..) => "embree16",
+            Peer::Glint8(..) => "glint8",
             Peer::TinyBvh(..) => "tinybvh8",
         }
     }
@@ -133,6 +140,21 @@ impl Peer<'_> {
             Peer::Embree16(s) => {
                 let t_max = if shadow { 1.0 } else { f32::INFINITY };
                 rays.chunks(16).map(|c| s.hits16(c, shadow, t_max)).sum()
+            }
+            Peer::Glint8(wide) if shadow => {
+                let t_max = [1.0; PACKET];
+                rays.chunks(PACKET)
+                    .map(|c| wide.occluded_packet(c, &t_max[..c.len()]).count_ones())
+                    .sum()
+            }
+            Peer::Glint8(wide) => {
+                let t_max = [f32::INFINITY; PACKET];
+                rays.chunks(PACKET)
+                    .map(|c| {
+                        let hits = wide.closest_packet(c, &t_max[..c.len()]);
+                        hits.iter().filter(|h| h.is_some()).count() as u32
+                    })
+                    .sum()
             }
             Peer::TinyBvh(b) => count_hits(
                 rays,
@@ -308,6 +330,7 @@ fn bench_mesh(
     }
     let mut peers = vec![
         Peer::Glint(&wide),
+        Peer::Glint8(&wide),
         Peer::GlintBinary(&bvh, tris),
         Peer::Obvhs(&cw, &otris),
     ];
@@ -356,6 +379,19 @@ fn bench_mesh(
             );
         }
         println!("{line}");
+        // The packets next to Embree's single rays and packets.
+        let glint8 = peers.iter().position(|p| matches!(p, Peer::Glint8(..)));
+        if let Some(g) = glint8 {
+            let mut line = String::from("  glint8 ÷");
+            for (p, peer) in peers.iter().enumerate() {
+                if matches!(peer, Peer::Embree(..) | Peer::Embree16(..)) {
+                    let mut ratios: Vec<f64> =
+                        (0..rounds).map(|r| secs[p][r] / secs[g][r]).collect();
+                    line += &format!(" {} {:.2}", peer.name(), median(&mut ratios));
+                }
+            }
+            println!("{line}");
+        }
     }
 }
 

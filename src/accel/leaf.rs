@@ -429,7 +429,7 @@ impl Candidates {
 /// here in f64 (no overflow or underflow from f32 inputs) with a margin for its own
 /// rounding.
 #[inline(always)]
-fn clear_of_zero(t: f32, det: f32, sizes: [f32; 3]) -> bool {
+pub(super) fn clear_of_zero(t: f32, det: f32, sizes: [f32; 3]) -> bool {
     f64::from(t) > 3.0001 * t_error_bound(t, det, sizes)
 }
 

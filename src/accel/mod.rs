@@ -11,6 +11,7 @@
 //! - [`traverse`]: closest-hit and any-hit traversal of that BVH.
 //! - [`wide`]: that BVH collapsed to 8-wide nodes with triangles in leaf order, for the render.
 //! - `wide_query`: the wide BVH's closest-hit and any-hit queries, one clone per instruction set.
+//! - `wide_packet`: the queries for packets of up to eight rays, one ray per SIMD lane.
 //! - [`leaf`]: the wide BVH's leaf triangles in SIMD groups, with a vectorised prefilter.
 //! - [`instance`]: a two-level BVH, one wide BVH per mesh shared by its instances.
 
@@ -26,6 +27,7 @@ pub mod traverse;
 pub mod triangle;
 pub mod wide;
 pub mod wide_node;
+mod wide_packet;
 mod wide_query;
 
 pub use aabb::Aabb;
@@ -35,6 +37,7 @@ pub use sphere::intersect_sphere;
 pub use traverse::{TraversalStats, TraversalVisitor};
 pub use triangle::{RayShear, TriangleHit, intersect_triangle, intersect_triangle_sheared};
 pub use wide::WideBvh;
+pub use wide_packet::{PACKET, PacketHits};
 
 /// A ray; `dir` need not be unit length (t is in units of `dir`).
 #[derive(Clone, Copy, Debug, PartialEq)]

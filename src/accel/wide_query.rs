@@ -11,6 +11,7 @@ use multiversion::multiversion;
 
 use super::leaf::{LANES, RayLeaf, groups_for, leaf_count};
 use super::triangle::{RayShear, TriangleHit, intersect_triangle_flagged};
+use super::wide_packet::PacketHits;
 use super::{Ray, WideBvh};
 
 /// What a query does at each leaf the traversal reaches.
@@ -183,6 +184,20 @@ impl WideBvh {
         let mut cull = t_max;
         self.traverse::<false>(ray, &mut cull, &mut leaves)
     }
+
+    /// For up to [`PACKET`](super::PACKET) rays at once (a packet, traced with one ray
+    /// per SIMD lane; see [`super::wide_packet`]): bit `i` is set when a triangle lies on
+    /// `rays[i]` in (0, `t_max[i]`), exactly when `any_hit(&rays[i], t_max[i], |_, _|
+    /// true)` is true.
+    pub fn occluded_packet(&self, rays: &[Ray], t_max: &[f32]) -> u32 {
+        occluded_packet_dispatched(self, rays, t_max)
+    }
+
+    /// For up to [`PACKET`](super::PACKET) rays at once (a packet; see
+    /// [`super::wide_packet`]): entry `i` is exactly `closest_hit_at(&rays[i], t_max[i])`.
+    pub fn closest_packet(&self, rays: &[Ray], t_max: &[f32]) -> PacketHits {
+        closest_packet_dispatched(self, rays, t_max)
+    }
 }
 
 impl<'a> RayLeaves<'a> {
@@ -223,4 +238,16 @@ fn any_hit_dispatched(
     visit: &mut dyn FnMut(u32, &TriangleHit) -> bool,
 ) -> bool {
     wide.any_hit_inlined(ray, t_max, visit)
+}
+
+/// [`WideBvh::occluded_packet`] for the best instruction set the CPU has.
+#[multiversion(targets("x86_64+avx2+fma", "x86_64+sse4.2"))]
+fn occluded_packet_dispatched(wide: &WideBvh, rays: &[Ray], t_max: &[f32]) -> u32 {
+    wide.occluded_packet_inlined(rays, t_max)
+}
+
+/// [`WideBvh::closest_packet`] for the best instruction set the CPU has.
+#[multiversion(targets("x86_64+avx2+fma", "x86_64+sse4.2"))]
+fn closest_packet_dispatched(wide: &WideBvh, rays: &[Ray], t_max: &[f32]) -> PacketHits {
+    wide.closest_packet_inlined(rays, t_max)
 }

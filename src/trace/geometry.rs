@@ -16,8 +16,8 @@ use crate::accel::leaf::NO_PRIM;
 use crate::accel::sphere::{sphere_roots, sphere_uv};
 use crate::accel::triangle::{RayShear, TriangleHit, intersect_triangle_sheared};
 use crate::accel::{
-    Aabb, Bvh, Instance, Ray, SplitMethod, TraversalStats, TraversalVisitor, TwoLevelBvh, WideBvh,
-    gamma, intersect_sphere,
+    Aabb, Bvh, Instance, PACKET, Ray, SplitMethod, TraversalStats, TraversalVisitor, TwoLevelBvh,
+    WideBvh, gamma, intersect_sphere,
 };
 use crate::scene::{Acceleration, BvhSplit, Mesh, MeshData, Settings, Sphere, Transform};
 use crate::stats::{RenderStats, Stage};
@@ -346,6 +346,19 @@ impl SceneGeometry {
                 });
             }
         }
+        self.intersect_beyond_triangles(ray, best, t_max, visitor)
+    }
+
+    /// `best`, the closest hit among the flattened triangles in (0, t_max) (t_max its t
+    /// if any), or a closer one on an instance or a sphere.
+    #[inline]
+    fn intersect_beyond_triangles<V: GeometryVisitor>(
+        &self,
+        ray: &Ray,
+        mut best: Option<Hit>,
+        mut t_max: f32,
+        visitor: &mut V,
+    ) -> Option<Hit> {
         // After the flattened triangles and strictly closer: of hits at the same t,
         // flattened triangles win over instances.
         if !self.instanced.is_empty()
@@ -377,6 +390,34 @@ impl SceneGeometry {
         best
     }
 
+    /// [`Self::intersect`] (unobserved) of up to [`PACKET`] rays with one `t_max`, into
+    /// `hits` (as long as `rays`). The flattened triangles take the rays as one packet
+    /// (`WideBvh::closest_packet`); instances and spheres, each ray after it.
+    pub fn intersect_packet(&self, rays: &[Ray], t_max: f32, hits: &mut [Option<Hit>]) {
+        if !self.use_wide::<()>() {
+            for (ray, hit) in rays.iter().zip(hits) {
+                *hit = self.intersect(ray, t_max, &mut ());
+            }
+            return;
+        }
+        let found = self
+            .tri_wide
+            .closest_packet(rays, &[t_max; PACKET][..rays.len()]);
+        let beyond = !self.instanced.is_empty() || !self.sphere_bvh.nodes.is_empty();
+        for ((ray, hit), found) in rays.iter().zip(hits).zip(found) {
+            let best = found.map(|(prim, lane, h)| Hit {
+                lane,
+                ..triangle_hit(prim, &h)
+            });
+            *hit = if beyond {
+                let t = best.map_or(t_max, |h| h.t);
+                self.intersect_beyond_triangles(ray, best, t, &mut ())
+            } else {
+                best
+            };
+        }
+    }
+
     /// Whether anything lies on the ray in (0, t_max).
     pub fn occluded<V: GeometryVisitor>(&self, ray: &Ray, t_max: f32, visitor: &mut V) -> bool {
         let tris = if self.use_wide::<V>() {
@@ -391,12 +432,49 @@ impl SceneGeometry {
                 })
             }
         };
-        tris || (!self.instanced.is_empty() && self.instanced.any_hit(ray, t_max, |_, _, _| true))
+        tris || self.occluded_beyond_triangles(ray, t_max, visitor)
+    }
+
+    /// Whether an instanced triangle or a sphere lies on the ray in (0, t_max).
+    fn occluded_beyond_triangles<V: GeometryVisitor>(
+        &self,
+        ray: &Ray,
+        t_max: f32,
+        visitor: &mut V,
+    ) -> bool {
+        (!self.instanced.is_empty() && self.instanced.any_hit(ray, t_max, |_, _, _| true))
             || (!self.sphere_bvh.nodes.is_empty()
                 && self.sphere_bvh.any_hit(ray, t_max, visitor, |p| {
                     let s = &self.spheres[p as usize];
                     intersect_sphere(ray, s.center, s.radius, t_max).is_some()
                 }))
+    }
+
+    /// [`Self::occluded`] (unobserved) of up to [`PACKET`] rays with one `t_max`: bit `i`
+    /// set when `rays[i]` is occluded. The flattened triangles take the rays as one
+    /// packet (`WideBvh::occluded_packet`); instances and spheres, each ray they did
+    /// not occlude.
+    pub fn occluded_packet(&self, rays: &[Ray], t_max: f32) -> u32 {
+        let wide = self.use_wide::<()>();
+        let mut blocked = if wide {
+            self.tri_wide
+                .occluded_packet(rays, &[t_max; PACKET][..rays.len()])
+        } else {
+            0
+        };
+        if wide && self.instanced.is_empty() && self.sphere_bvh.nodes.is_empty() {
+            return blocked;
+        }
+        for (i, ray) in rays.iter().enumerate() {
+            let hit = blocked & (1 << i) == 0
+                && if wide {
+                    self.occluded_beyond_triangles(ray, t_max, &mut ())
+                } else {
+                    self.occluded(ray, t_max, &mut ())
+                };
+            blocked |= (hit as u32) << i;
+        }
+        blocked
     }
 
     /// Light transmitted along the ray through (0, t_max): the product over every surface

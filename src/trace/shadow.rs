@@ -11,7 +11,7 @@
 use glam::Vec3;
 use rayon::prelude::*;
 
-use crate::accel::Ray;
+use crate::accel::{PACKET, Ray};
 
 /// Rays per rayon task and per shading chunk: large enough to amortise scheduling, small
 /// enough to balance.
@@ -117,6 +117,21 @@ impl ShadowQueue {
     /// Traces every shadow ray with `visible` (what of its contribution arrives) and adds
     /// the result to its owner's entry of `radiance`, one chunk per task.
     pub fn trace(&mut self, radiance: &mut [Vec3], visible: impl Fn(&ShadowRay) -> Vec3 + Sync) {
+        self.trace_packets(radiance, |rays, arrived| {
+            for (s, a) in rays.iter().zip(arrived) {
+                *a = visible(s);
+            }
+        });
+    }
+
+    /// [`Self::trace`] over packets: `visible(rays, arrived)` gets up to [`PACKET`]
+    /// consecutive shadow rays of one chunk and writes what of each contribution arrives
+    /// into `arrived` (as long as `rays`); the results are added in queue order as there.
+    pub fn trace_packets(
+        &mut self,
+        radiance: &mut [Vec3],
+        visible: impl Fn(&[ShadowRay], &mut [Vec3]) + Sync,
+    ) {
         let live = self.live;
         debug_assert!(
             live <= radiance.len().div_ceil(CHUNK),
@@ -132,7 +147,10 @@ impl ShadowQueue {
             .enumerate()
             .for_each(|(c, ((radiance, rays), arrived))| {
                 arrived.clear();
-                arrived.extend(rays.iter().map(&visible));
+                arrived.resize(rays.len(), Vec3::ZERO);
+                for (rays, arrived) in rays.chunks(PACKET).zip(arrived.chunks_mut(PACKET)) {
+                    visible(rays, arrived);
+                }
                 let first = c * CHUNK;
                 for (s, a) in rays.iter().zip(arrived.iter()) {
                     radiance[s.owner as usize - first] += *a;
@@ -205,6 +223,41 @@ mod tests {
         assert_eq!(arrived.len(), rays.len());
         assert_eq!(arrived[2], Vec3::ZERO, "owner 5 is blocked");
         assert_eq!(arrived[5], rays[5].contribution);
+    }
+
+    #[test]
+    fn packets_are_consecutive_rays_of_one_chunk_added_in_order() {
+        // 21 rays in chunk 0 (two full packets and a tail of 5), 3 in chunk 1.
+        let owners: Vec<u32> = (0..21)
+            .map(|i| i / 4)
+            .chain([CHUNK as u32, CHUNK as u32 + 2, CHUNK as u32 + 2])
+            .collect();
+        let rays: Vec<ShadowRay> = owners.iter().map(|&o| shadow(o)).collect();
+        let mut by_ray = ShadowQueue::from_rays(&rays);
+        let mut by_packet = ShadowQueue::from_rays(&rays);
+        let mut radiance = vec![Vec3::ZERO; CHUNK + 3];
+        let mut expected = radiance.clone();
+        // Rays of odd owners are blocked.
+        let visible = |s: &ShadowRay| s.contribution * s.owner.is_multiple_of(2) as u32 as f32;
+        by_ray.trace(&mut expected, visible);
+        let packets = std::sync::Mutex::new(Vec::new());
+        by_packet.trace_packets(&mut radiance, |rays, arrived| {
+            packets
+                .lock()
+                .unwrap()
+                .push(rays.iter().map(|s| s.owner).collect::<Vec<_>>());
+            for (s, a) in rays.iter().zip(arrived) {
+                *a = visible(s);
+            }
+        });
+        assert_eq!(radiance, expected);
+        assert_ne!(expected, vec![Vec3::ZERO; CHUNK + 3]);
+        assert_eq!(by_packet.arrived(), by_ray.arrived());
+        let mut packets = packets.into_inner().unwrap();
+        packets.sort();
+        let sizes: Vec<usize> = packets.iter().map(Vec::len).collect();
+        assert_eq!(sizes, [8, 8, 5, 3]);
+        assert_eq!(packets.concat(), owners, "consecutive, in queue order");
     }
 
     #[test]

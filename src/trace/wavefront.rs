@@ -235,6 +235,32 @@ fn closest_hits<O: HitObserver>(
     observers
 }
 
+/// [`closest_hits`] unobserved, with consecutive rays (of neighbouring pixels) traced
+/// as packets (`SceneGeometry::intersect_packet`): the same hits.
+fn closest_hits_in_packets(
+    geometry: &SceneGeometry,
+    rays: &[QueuedRay],
+    interpolate: bool,
+    surfaces: &mut Vec<Option<Surface>>,
+) {
+    use crate::accel::PACKET;
+    surfaces.clear();
+    surfaces.resize_with(rays.len(), || None);
+    surfaces
+        .par_chunks_mut(PACKET)
+        .zip(rays.par_chunks(PACKET))
+        .with_min_len(CHUNK / PACKET)
+        .for_each(|(surfaces, rays)| {
+            let packet: [Ray; PACKET] = std::array::from_fn(|i| rays[i.min(rays.len() - 1)].ray);
+            let mut hits = [None; PACKET];
+            let n = rays.len();
+            geometry.intersect_packet(&packet[..n], f32::INFINITY, &mut hits[..n]);
+            for ((s, q), hit) in surfaces.iter_mut().zip(rays).zip(hits) {
+                *s = hit.map(|h| surface_at(geometry, &q.ray, &h, interpolate));
+            }
+        });
+}
+
 /// Finds each ray's closest hit and builds its shading point; with a [`TraceLog`], also
 /// keeps each ray's traversal.
 pub fn intersect_rays(
@@ -249,7 +275,7 @@ pub fn intersect_rays(
     // Into the last depth's buffer: its allocation is reused.
     match log {
         None => {
-            closest_hits::<()>(&geometry, &wf.rays, interpolate, &mut wf.hits);
+            closest_hits_in_packets(&geometry, &wf.rays, interpolate, &mut wf.hits);
         }
         Some(mut log) => {
             log.rays = closest_hits::<RayTrace>(&geometry, &wf.rays, interpolate, &mut wf.hits);
@@ -502,13 +528,20 @@ pub fn trace_shadow_rays(
             s.contribution * geometry.transmittance(&s.ray, t_max, &materials, &mut ())
         });
     } else {
-        wf.shadow_rays.trace(&mut wf.ray_radiance, |s| {
-            if geometry.occluded(&s.ray, t_max, &mut ()) {
-                Vec3::ZERO
-            } else {
-                s.contribution
-            }
-        });
+        // Consecutive shadow rays (of neighbouring pixels, to the same light) as packets.
+        wf.shadow_rays
+            .trace_packets(&mut wf.ray_radiance, |rays, arrived| {
+                let packet: [Ray; crate::accel::PACKET] =
+                    std::array::from_fn(|i| rays[i.min(rays.len() - 1)].ray);
+                let blocked = geometry.occluded_packet(&packet[..rays.len()], t_max);
+                for (i, (s, a)) in rays.iter().zip(arrived).enumerate() {
+                    *a = if blocked & (1 << i) != 0 {
+                        Vec3::ZERO
+                    } else {
+                        s.contribution
+                    };
+                }
+            });
     }
     let n = wf.shadow_rays.len() as u64;
     stats.record(Stage::TraceShadowRays, n);

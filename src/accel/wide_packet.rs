@@ -1,0 +1,581 @@
+//! Packets of up to [`PACKET`] rays through the wide BVH, one ray per SIMD lane: each
+//! child box is tested against every ray of the packet at once (the box broadcast),
+//! and each leaf triangle likewise (its vertices broadcast), where the single-ray
+//! queries put eight boxes or four triangles in the lanes of one ray. What that buys
+//! is eight lanes where a leaf group has four, and one traversal per packet.
+//!
+//! Every lane computes exactly what the single-ray query computes for its ray, so each
+//! ray's answer is [`WideBvh::any_hit`]'s:
+//! - The box test is `RayBoxes::test`'s arithmetic lane by lane; the near and far
+//!   planes of each axis are picked per lane by the sign of the lane's inverse
+//!   direction (a blend), so rays of every octant share a packet. A ray visits exactly
+//!   the nodes and leaves its single-ray traversal visits (the order differs, which
+//!   an any-hit answer does not depend on).
+//! - The leaf prefilter is `RayLeaf::shear` + `candidates` lane by lane, with the
+//!   triangle's coordinates in the ray's permuted axis order (`RayShear::{kx, ky,
+//!   kz}`). That order is one per traversal: the packet is split at setup into
+//!   sub-packets of rays with the same axes, each traversed on its own (coherent rays
+//!   make one). The prefilter rejects only what the scalar test rejects before its
+//!   division; the scalar test (`intersect_triangle_flagged`, with the leaf's
+//!   degenerate flag) decides each (ray, triangle) it keeps, and a ray leaves the
+//!   packet's active mask at its first hit.
+
+use arrayvec::ArrayVec;
+use glam::Vec3;
+use wide::u32x8;
+
+use super::bvh::MAX_DEPTH;
+use super::leaf::{LANES, TriGroup, clear_of_zero, groups_for, leaf_count};
+use super::triangle::{RayShear, TriangleHit, intersect_triangle_flagged, is_degenerate};
+use super::wide_node::{EMPTY, WIDTH, WideNode, leaf_lanes};
+use super::{BOX_MARGIN, Ray, WideBvh};
+
+/// Rays per packet: one AVX2 register of f32.
+pub const PACKET: usize = 8;
+
+/// One f32 per ray of a packet.
+type Lanes = [f32; PACKET];
+
+/// Traversal stack entries any tree needs (as the single-ray traversal's).
+const STACK_SIZE: usize = (WIDTH - 1) * MAX_DEPTH as usize + 1;
+
+/// The lanes of `node` holding a child.
+#[inline(always)]
+fn used_lanes(node: &WideNode) -> u32 {
+    !u32x8::from(node.child)
+        .simd_eq(u32x8::splat(EMPTY))
+        .to_bitmask()
+        & ((1 << WIDTH) - 1)
+}
+
+/// Bits of the first `n` rays of a packet.
+#[inline(always)]
+fn first_lanes(n: usize) -> u32 {
+    (1u32 << n) - 1
+}
+
+/// The per-ray constants of a packet, one lane per ray; lanes past the packet's rays
+/// hold zeros and the first ray's shear (never active).
+pub(super) struct PacketRays {
+    /// Origin, world axes.
+    origin: [Lanes; 3],
+    /// 1 / direction, world axes (the box test's).
+    inv_dir: [Lanes; 3],
+    /// Each ray's box cull distance (the single-ray traversal's `t_max`).
+    cull: Lanes,
+    /// Each ray's bound of the triangle test.
+    bound: Lanes,
+    /// The triangle test's shear (`RayShear::{sx, sy, sz}`).
+    sx: Lanes,
+    sy: Lanes,
+    sz: Lanes,
+    /// Origin in each ray's own permuted axis order (`RayLeaf`'s).
+    origin_k: [Lanes; 3],
+    /// The scalar test's per-ray constants.
+    shears: [RayShear; PACKET],
+    origins: [Vec3; PACKET],
+    /// Rays of the packet.
+    len: usize,
+}
+
+impl PacketRays {
+    /// The constants of `rays` (1 to `PACKET`) with bounds `t_max`.
+    #[inline(always)]
+    pub(super) fn new(rays: &[Ray], t_max: &[f32]) -> PacketRays {
+        assert!(
+            (1..=PACKET).contains(&rays.len()) && t_max.len() == rays.len(),
+            "a packet of {} rays and {} bounds",
+            rays.len(),
+            t_max.len()
+        );
+        let mut p = PacketRays {
+            origin: [[0.0; PACKET]; 3],
+            inv_dir: [[0.0; PACKET]; 3],
+            cull: [0.0; PACKET],
+            bound: [0.0; PACKET],
+            sx: [0.0; PACKET],
+            sy: [0.0; PACKET],
+            sz: [0.0; PACKET],
+            origin_k: [[0.0; PACKET]; 3],
+            shears: [RayShear::new(&rays[0]); PACKET],
+            origins: [rays[0].origin; PACKET],
+            len: rays.len(),
+        };
+        // Lanes past the rays keep zeros and the first ray's shear (never active).
+        for (r, (ray, &t_max)) in rays.iter().zip(t_max).enumerate() {
+            let s = RayShear::new(ray);
+            let (o, inv) = (ray.origin.to_array(), ray.dir.recip().to_array());
+            for axis in 0..3 {
+                p.origin[axis][r] = o[axis];
+                p.inv_dir[axis][r] = inv[axis];
+            }
+            for (k, axis) in [s.kx, s.ky, s.kz].into_iter().enumerate() {
+                p.origin_k[k][r] = o[axis];
+            }
+            (p.sx[r], p.sy[r], p.sz[r]) = (s.sx, s.sy, s.sz);
+            (p.cull[r], p.bound[r]) = (t_max, t_max);
+            (p.shears[r], p.origins[r]) = (s, ray.origin);
+        }
+        p
+    }
+
+    /// The rays whose permuted axes are ray `r`'s (kx and kz decide ky).
+    #[inline(always)]
+    fn same_axes(&self, r: usize) -> u32 {
+        let key = |s: &RayShear| s.kx | s.kz << 2;
+        let k = key(&self.shears[r]);
+        let mut class = 0;
+        for (i, s) in self.shears.iter().enumerate() {
+            class |= ((key(s) == k) as u32) << i;
+        }
+        class
+    }
+
+    /// The permuted axes of ray `r`.
+    #[inline(always)]
+    fn axes(&self, r: usize) -> [usize; 3] {
+        let s = &self.shears[r];
+        [s.kx, s.ky, s.kz]
+    }
+
+    /// Each ray's entry distance into child `c` of `node` (junk where it misses) and
+    /// the mask of rays that meet it in [0, cull]: `RayBoxes::test` lane by lane, the
+    /// near plane of each axis the minimum unless the lane's inverse direction has its
+    /// sign bit set (as `RayBoxes::new` picks it).
+    #[inline(always)]
+    fn test_box(&self, node: &WideNode, c: usize) -> (Lanes, u32) {
+        let b = &node.bounds;
+        let lo = [b[0][c], b[1][c], b[2][c]];
+        let hi = [b[3][c], b[4][c], b[5][c]];
+        let mut hit = [0u32; PACKET];
+        let mut t_near = [0.0f32; PACKET];
+        for r in 0..PACKET {
+            let mut near = [0.0f32; 3];
+            let mut far = [0.0f32; 3];
+            for axis in 0..3 {
+                let (o, inv) = (self.origin[axis][r], self.inv_dir[axis][r]);
+                // A compare on the sign bit: one blend on the inverse itself.
+                let neg = (inv.to_bits() as i32) < 0;
+                let (n, f) = if neg {
+                    (hi[axis], lo[axis])
+                } else {
+                    (lo[axis], hi[axis])
+                };
+                near[axis] = (n - o) * inv;
+                far[axis] = (f - o) * inv;
+            }
+            t_near[r] = 0.0f32.max(near[0]).max(near[1]).max(near[2]);
+            let far = f32::INFINITY.min(far[0]).min(far[1]).min(far[2]);
+            let t_far = far.min(self.cull[r]) * BOX_MARGIN;
+            hit[r] = ((t_near[r] <= t_far) as u32).wrapping_neg();
+        }
+        (t_near, u32x8::from(hit).to_bitmask())
+    }
+
+    /// The rays (of those with axes `[kx, ky, kz]`) that the scalar test may accept on
+    /// lane `l` of `g` within their `bound`: `RayLeaf::shear` and `candidates` with the
+    /// triangle in the lanes' place, the same f32 operations in the same order (bit
+    /// clear only when the scalar test rejects the ray before its division).
+    #[inline(always)]
+    fn prefilter(&self, g: &TriGroup, l: usize, axes: [usize; 3]) -> u32 {
+        self.candidates(g, l, axes).mask
+    }
+
+    /// [`Self::prefilter`] with each ray's values of the scalar test (`Candidates`'s,
+    /// rays in the lanes' place), so that most kept rays need not run it.
+    #[inline(always)]
+    fn candidates(&self, g: &TriGroup, l: usize, [kx, ky, kz]: [usize; 3]) -> PacketCandidates {
+        let mut out = PacketCandidates {
+            mask: 0,
+            zero: 0,
+            e: [[0.0; PACKET]; 3],
+            det: [0.0; PACKET],
+            t_scaled: [0.0; PACKET],
+            sizes: [[0.0; PACKET]; 3],
+        };
+        let mut zeros = [0u32; PACKET];
+        let v = &g.v;
+        let p = |k: usize| [v[k][kx][l], v[k][ky][l], v[k][kz][l]];
+        let (a, b, c) = (p(0), p(1), p(2));
+        let mut bits = [0u32; PACKET];
+        for (r, bit) in bits.iter_mut().enumerate() {
+            let [ox, oy, oz] = [
+                self.origin_k[0][r],
+                self.origin_k[1][r],
+                self.origin_k[2][r],
+            ];
+            let (sx, sy, sz) = (self.sx[r], self.sy[r], self.sz[r]);
+            let (a_x, a_y, a_z) = (a[0] - ox, a[1] - oy, a[2] - oz);
+            let (b_x, b_y, b_z) = (b[0] - ox, b[1] - oy, b[2] - oz);
+            let (c_x, c_y, c_z) = (c[0] - ox, c[1] - oy, c[2] - oz);
+            let (ax, ay) = (a_x - sx * a_z, a_y - sy * a_z);
+            let (bx, by) = (b_x - sx * b_z, b_y - sy * b_z);
+            let (cx, cy) = (c_x - sx * c_z, c_y - sy * c_z);
+            let z = [sz * a_z, sz * b_z, sz * c_z];
+            let u = cx * by - cy * bx;
+            let v = ax * cy - ay * cx;
+            let w = bx * ay - by * ax;
+            // From here `candidates` verbatim (see there for why each step is exact).
+            let zero = (u == 0.0) | (v == 0.0) | (w == 0.0);
+            let (ub, vb, wb) = (u.to_bits(), v.to_bits(), w.to_bits());
+            let mixed = (((ub ^ vb) | (ub ^ wb)) as i32) < 0;
+            let det = u + v + w;
+            let t_scaled = u * z[0] + v * z[1] + w * z[2];
+            let sign = det.to_bits() & 0x8000_0000;
+            let signed_t = f32::from_bits(t_scaled.to_bits() ^ sign);
+            let bound = f32::from_bits((self.bound[r] * det).to_bits() ^ sign);
+            let inside = (signed_t > 0.0) & (signed_t < bound);
+            let keep = zero | (!mixed & inside);
+            *bit = (keep as u32).wrapping_neg();
+            zeros[r] = (zero as u32).wrapping_neg();
+            [out.e[0][r], out.e[1][r], out.e[2][r]] = [u, v, w];
+            (out.det[r], out.t_scaled[r]) = (det, t_scaled);
+            // `Sheared::sizes`: maxps itself, as there.
+            let max = |m: f32, x: &f32| if m > x.abs() { m } else { x.abs() };
+            let pz = [a_z, b_z, c_z].iter().fold(0.0, max);
+            let s = [ax, ay, bx, by, cx, cy].iter().fold(0.0, max);
+            [out.sizes[0][r], out.sizes[1][r], out.sizes[2][r]] = [pz, s, sz.abs() * pz];
+        }
+        out.mask = u32x8::from(bits).to_bitmask();
+        out.zero = u32x8::from(zeros).to_bitmask();
+        out
+    }
+
+    /// Tests rays `rays` (with axes `axes`) against the leaf at group `group` with the
+    /// lane count `count`; returns the rays it occludes.
+    #[inline(always)]
+    fn occluded_in_leaf(
+        &self,
+        wide: &WideBvh,
+        group: usize,
+        count: u32,
+        axes: [usize; 3],
+        rays: u32,
+    ) -> u32 {
+        let (count, degenerate) = leaf_count(count);
+        let mut left = rays;
+        for i in 0..groups_for(count) {
+            let g = &wide.leaves.groups[group + i];
+            // Only the lanes holding triangles: padding would pass no ray anyway.
+            for l in 0..(count - i * LANES).min(LANES) {
+                let mut kept = self.prefilter(g, l, axes) & left;
+                while kept != 0 {
+                    let r = kept.trailing_zeros() as usize;
+                    kept &= kept - 1;
+                    let (s, o, t_max) = (&self.shears[r], self.origins[r], self.bound[r]);
+                    if intersect_triangle_flagged(s, o, g.triangle(l), t_max, degenerate).is_some()
+                    {
+                        left &= !(1 << r);
+                    }
+                }
+                if left == 0 {
+                    return rays;
+                }
+            }
+        }
+        rays & !left
+    }
+
+    /// The rays whose entry distance `t_entry` lies within their cull distance, with
+    /// the slab test's margin, compared as the single-ray traversal compares a leaf's
+    /// (`LEAF`: t <= cull) or a popped entry's (not t > cull; they differ on NaN).
+    #[inline(always)]
+    #[allow(clippy::neg_cmp_op_on_partial_ord)]
+    fn within<const LEAF: bool>(&self, t_entry: &Lanes) -> u32 {
+        let mut bits = [0u32; PACKET];
+        for r in 0..PACKET {
+            let (t, cull) = (t_entry[r], self.cull[r] * BOX_MARGIN);
+            let keep = if LEAF { t <= cull } else { !(t > cull) };
+            bits[r] = (keep as u32).wrapping_neg();
+        }
+        u32x8::from(bits).to_bitmask()
+    }
+
+    /// Tests rays `rays` (with axes `axes`) against the leaf at group `group` with the
+    /// lane count `count`, keeping in `best` each ray's least (t, index) hit as
+    /// `ClosestLeaves` does, and lowering its cull distance and bound with it.
+    #[inline(always)]
+    fn closest_in_leaf(
+        &mut self,
+        wide: &WideBvh,
+        (group, count): (usize, u32),
+        axes: [usize; 3],
+        rays: u32,
+        best: &mut PacketHits,
+        limit: &Lanes,
+    ) {
+        let (count, degenerate) = leaf_count(count);
+        for i in 0..groups_for(count) {
+            let g = &wide.leaves.groups[group + i];
+            for l in 0..(count - i * LANES).min(LANES) {
+                let candidates = self.candidates(g, l, axes);
+                let mut kept = candidates.mask & rays;
+                while kept != 0 {
+                    let r = kept.trailing_zeros() as usize;
+                    kept &= kept - 1;
+                    let (s, o, bound) = (&self.shears[r], self.origins[r], self.bound[r]);
+                    let Some(h) = candidates.hit(r, g.triangle(l), degenerate, s, o, bound) else {
+                        continue;
+                    };
+                    let p = wide.prim_at(group + i, l);
+                    if best[r].is_none_or(|(bp, _, bh)| h.t < bh.t || (h.t == bh.t && p < bp)) {
+                        self.cull[r] = h.t;
+                        self.bound[r] = h.t.next_up().next_up().next_up().min(limit[r]);
+                        best[r] = Some((p, ((group + i) * LANES + l) as u32, h));
+                    }
+                }
+            }
+        }
+    }
+}
+
+/// The packet prefilter's answer for one triangle: `leaf::Candidates` with rays in
+/// the lanes' place.
+struct PacketCandidates {
+    /// Rays the scalar test may accept.
+    mask: u32,
+    /// Rays with an edge function exactly zero, which the scalar test redoes in f64.
+    zero: u32,
+    /// The edge functions u, v, w.
+    e: [Lanes; 3],
+    det: Lanes,
+    t_scaled: Lanes,
+    /// `Sheared::sizes` of each ray.
+    sizes: [Lanes; 3],
+}
+
+impl PacketCandidates {
+    /// The scalar test on ray `r` (in `mask`) and triangle `tri` with a bound `t_max`
+    /// at most the prefilter's: `Candidates::hit` with the ray in the lane's place (the
+    /// ray's values where they decide it, else the scalar test itself).
+    #[inline(always)]
+    fn hit(
+        &self,
+        r: usize,
+        tri: [Vec3; 3],
+        may_be_degenerate: bool,
+        shear: &RayShear,
+        origin: Vec3,
+        t_max: f32,
+    ) -> Option<TriangleHit> {
+        let scalar = || intersect_triangle_flagged(shear, origin, tri, t_max, may_be_degenerate);
+        if self.zero & (1 << r) != 0 {
+            return scalar();
+        }
+        let (det, t_scaled) = (self.det[r], self.t_scaled[r]);
+        let beyond = if det < 0.0 {
+            t_scaled <= t_max * det
+        } else {
+            t_scaled >= t_max * det
+        };
+        if beyond {
+            return None;
+        }
+        if may_be_degenerate && is_degenerate(tri[0], tri[1], tri[2]) {
+            return None;
+        }
+        let inv_det = 1.0 / det;
+        let t = t_scaled * inv_det;
+        if !(t > 0.0 && t < t_max) {
+            return None;
+        }
+        if !clear_of_zero(t, det, self.sizes.map(|s| s[r])) {
+            return scalar();
+        }
+        let [u, v, w] = self.e.map(|e| e[r]);
+        Some(TriangleHit {
+            t,
+            b0: u * inv_det,
+            b1: v * inv_det,
+            b2: w * inv_det,
+        })
+    }
+}
+
+/// Each ray's closest hit in a packet: the triangle's index, where it sits in the
+/// leaves (`group * LANES + lane`) and the hit, as [`WideBvh::closest_hit_at`] gives it.
+pub type PacketHits = [Option<(u32, u32, TriangleHit)>; PACKET];
+
+/// Sort key of child `c` entered at `t` (not NaN, not below zero): by t, then child.
+#[inline(always)]
+fn key(t: f32, c: usize) -> u64 {
+    ((t.to_bits() as u64) << 32) | c as u64
+}
+
+impl WideBvh {
+    /// [`Self::occluded_packet`] compiled for whatever target features the caller has.
+    #[inline(always)]
+    pub(super) fn occluded_packet_inlined(&self, rays: &[Ray], t_max: &[f32]) -> u32 {
+        if self.nodes.is_empty() || rays.is_empty() {
+            return 0;
+        }
+        let p = PacketRays::new(rays, t_max);
+        let mut todo = first_lanes(p.len);
+        let mut occluded = 0;
+        while todo != 0 {
+            let first = todo.trailing_zeros() as usize;
+            let (axes, class) = (p.axes(first), p.same_axes(first) & todo);
+            occluded |= self.occluded_sub_packet(&p, axes, class);
+            todo &= !class;
+        }
+        occluded
+    }
+
+    /// The rays of `rays` (all with axes `axes`) that a triangle occludes: the any-hit
+    /// traversal of [`WideBvh::traverse`] with a mask of rays per entry, leaves before
+    /// interior children, until every ray is occluded or the stack is empty.
+    #[inline(always)]
+    fn occluded_sub_packet(&self, p: &PacketRays, axes: [usize; 3], rays: u32) -> u32 {
+        let mut active = rays;
+        let mut stack: ArrayVec<(u32, u32), STACK_SIZE> = ArrayVec::new();
+        let mut next = Some((0u32, active));
+        loop {
+            let Some((index, mask)) = next.take().or_else(|| stack.pop()) else {
+                return rays & !active;
+            };
+            // Rays occluded since this entry was pushed are done.
+            let mask = mask & active;
+            if mask == 0 {
+                continue;
+            }
+            let node = &self.nodes[index as usize];
+            let used = used_lanes(node);
+            let mut hits = [0u32; WIDTH];
+            let mut lanes = used;
+            while lanes != 0 {
+                let c = lanes.trailing_zeros() as usize;
+                lanes &= lanes - 1;
+                hits[c] = p.test_box(node, c).1 & mask;
+            }
+            let leaves = leaf_lanes(node) & used;
+            let mut lanes = leaves;
+            while lanes != 0 {
+                let c = lanes.trailing_zeros() as usize;
+                lanes &= lanes - 1;
+                let m = hits[c] & active;
+                if m != 0 {
+                    let (child, count) = (node.child[c] as usize, node.count[c]);
+                    active &= !p.occluded_in_leaf(self, child, count, axes, m);
+                    if active == 0 {
+                        return rays;
+                    }
+                }
+            }
+            let mut lanes = used & !leaves;
+            while lanes != 0 {
+                let c = lanes.trailing_zeros() as usize;
+                lanes &= lanes - 1;
+                let m = hits[c] & active;
+                if m == 0 {
+                    continue;
+                }
+                if let Some(prev) = next.replace((node.child[c], m)) {
+                    stack.push(prev);
+                }
+            }
+        }
+    }
+}
+
+impl WideBvh {
+    /// [`Self::closest_packet`] compiled for whatever target features the caller has.
+    #[inline(always)]
+    pub(super) fn closest_packet_inlined(&self, rays: &[Ray], t_max: &[f32]) -> PacketHits {
+        let mut best: PacketHits = [None; PACKET];
+        if self.nodes.is_empty() || rays.is_empty() {
+            return best;
+        }
+        let mut p = PacketRays::new(rays, t_max);
+        let limit = p.cull;
+        let mut todo = first_lanes(p.len);
+        while todo != 0 {
+            let first = todo.trailing_zeros() as usize;
+            let (axes, class) = (p.axes(first), p.same_axes(first) & todo);
+            self.closest_sub_packet(&mut p, axes, class, &limit, &mut best);
+            todo &= !class;
+        }
+        best
+    }
+
+    /// The closest hits of `rays` (all with axes `axes`) into `best`: the closest-hit
+    /// traversal of [`WideBvh::traverse`] with a mask of rays and their entry distances
+    /// per entry, children ordered by the least entry distance of the rays meeting them.
+    /// Which hit wins does not depend on that order (see `ClosestLeaves`).
+    #[inline(always)]
+    fn closest_sub_packet(
+        &self,
+        p: &mut PacketRays,
+        axes: [usize; 3],
+        rays: u32,
+        limit: &Lanes,
+        best: &mut PacketHits,
+    ) {
+        let mut stack: ArrayVec<(u32, u32, Lanes), STACK_SIZE> = ArrayVec::new();
+        let mut next = Some((0u32, rays, [0.0f32; PACKET]));
+        loop {
+            let Some((index, mask, t_entry)) = next.take().or_else(|| stack.pop()) else {
+                return;
+            };
+            // Rays whose closest hit so far lies before this box skip it.
+            let mask = mask & p.within::<false>(&t_entry);
+            if mask == 0 {
+                continue;
+            }
+            let node = &self.nodes[index as usize];
+            let mut t_near = [[0.0f32; PACKET]; WIDTH];
+            let mut hits = [0u32; WIDTH];
+            // The children met, nearest first.
+            let mut order: ArrayVec<u64, WIDTH> = ArrayVec::new();
+            let mut lanes = used_lanes(node);
+            while lanes != 0 {
+                let c = lanes.trailing_zeros() as usize;
+                lanes &= lanes - 1;
+                let (t, h) = p.test_box(node, c);
+                let h = h & mask;
+                if h == 0 {
+                    continue;
+                }
+                let mut nearest = f32::INFINITY;
+                for (r, &t) in t.iter().enumerate() {
+                    if h & (1 << r) != 0 {
+                        nearest = nearest.min(t);
+                    }
+                }
+                (t_near[c], hits[c]) = (t, h);
+                let k = key(nearest, c);
+                let mut i = order.len();
+                order.push(k);
+                while i > 0 && order[i - 1] > k {
+                    order[i] = order[i - 1];
+                    i -= 1;
+                }
+                order[i] = k;
+            }
+            let leaves = leaf_lanes(node);
+            // Interior children: the nearest next, the others pushed farthest first.
+            for &k in order.iter().rev() {
+                let c = k as u32 as usize;
+                if leaves & (1 << c) == 0
+                    && let Some(prev) = next.replace((node.child[c], hits[c], t_near[c]))
+                {
+                    stack.push(prev);
+                }
+            }
+            for &k in &order {
+                let c = k as u32 as usize;
+                if leaves & (1 << c) == 0 {
+                    continue;
+                }
+                let m = hits[c] & p.within::<true>(&t_near[c]);
+                if m != 0 {
+                    let leaf = (node.child[c] as usize, node.count[c]);
+                    p.closest_in_leaf(self, leaf, axes, m, best, limit);
+                }
+            }
+        }
+    }
+}
+
+#[cfg(test)]
+#[path = "wide_packet_tests.rs"]
+mod tests;

@@ -1,0 +1,271 @@
+//! Tests of the packet query against the single-ray query, ray by ray.
+
+use super::*;
+use crate::accel::triangle::TriangleHit;
+use crate::accel::{Aabb, Bvh, SplitMethod};
+use crate::test_util::Lcg;
+use glam::vec3;
+
+type Tri = [Vec3; 3];
+
+/// A triangle soup, a grid of quads in the plane y = 0 (shared edges, a plane through
+/// zero) and exactly collinear (degenerate) triangles, under one wide BVH.
+fn scene() -> (Vec<Tri>, WideBvh) {
+    let mut rng = Lcg(5);
+    let mut tris: Vec<Tri> = (0..400)
+        .map(|_| {
+            let c = rng.vec() * 10.0 - Vec3::splat(5.0);
+            [c, c + rng.dir() * 0.7, c + rng.dir() * 0.7]
+        })
+        .collect();
+    for i in -4..4 {
+        for j in -4..4 {
+            let p = |a: i32, b: i32| vec3(a as f32, 0.0, b as f32);
+            tris.push([p(i, j), p(i + 1, j), p(i + 1, j + 1)]);
+            tris.push([p(i, j), p(i + 1, j + 1), p(i, j + 1)]);
+        }
+    }
+    for _ in 0..40 {
+        let p = ((rng.vec() * 64.0).floor() - Vec3::splat(32.0)) / 8.0;
+        let d = ((rng.vec() * 16.0).floor() - Vec3::splat(8.0)) / 16.0;
+        tris.push([p, p + d, p + 3.0 * d]);
+    }
+    let wide = build(&tris);
+    (tris, wide)
+}
+
+fn build(tris: &[Tri]) -> WideBvh {
+    let bounds: Vec<Aabb> = tris.iter().map(|t| Aabb::from_points(t)).collect();
+    let wide = WideBvh::collapse(&Bvh::build(&bounds, SplitMethod::SahBinned), tris);
+    wide.validate(tris).unwrap();
+    wide
+}
+
+/// A direction with some components exactly 0 or -0 (every fourth ray), else random.
+fn direction(rng: &mut Lcg, i: usize) -> Vec3 {
+    let mut d = rng.dir();
+    if i.is_multiple_of(4) {
+        for axis in 0..3 {
+            if rng.next_f32() < 0.5 {
+                d[axis] = if rng.next_f32() < 0.5 { 0.0 } else { -0.0 };
+            }
+        }
+        if d == Vec3::ZERO {
+            d.y = -1.0;
+        }
+    }
+    d
+}
+
+/// Bounds: infinite, finite, tiny, and the ray's own first hit (exactly, and just
+/// past it), so that hits on the bound itself are decided as the single ray does.
+fn bound(rng: &mut Lcg, wide: &WideBvh, ray: &Ray) -> f32 {
+    match rng.below(6) {
+        0 => f32::INFINITY,
+        1 => 4.0 * rng.next_f32(),
+        2 => [1e-30, f32::MIN_POSITIVE, 1e-6][rng.below(3) as usize],
+        k => match wide.closest_hit(ray, f32::INFINITY) {
+            Some((_, h)) if k == 3 => h.t,
+            Some((_, h)) => h.t.next_up(),
+            None => 2.0,
+        },
+    }
+}
+
+/// Rays of every kind the render and the stress cases make: incoherent (mixed octants
+/// and axes), coherent (from one point to nearby targets, as shadow rays to a light),
+/// and from points on the grid's edges and vertices (origins on triangles' planes).
+fn rays(wide: &WideBvh, n: usize, seed: u64) -> Vec<(Ray, f32)> {
+    let mut rng = Lcg(seed);
+    let mut out = Vec::with_capacity(n);
+    let mut from = Vec3::ZERO;
+    for i in 0..n {
+        let ray = match i / 8 % 3 {
+            0 => Ray::new(rng.vec() * 14.0 - Vec3::splat(7.0), direction(&mut rng, i)),
+            1 => {
+                if i % 8 == 0 {
+                    from = rng.vec() * 10.0 - Vec3::splat(5.0);
+                }
+                let target = vec3(0.5, 4.0, -0.5) + rng.vec() * 1.5;
+                Ray::new(from, target - from)
+            }
+            _ => {
+                let on_edge = (rng.vec() * 8.0 - Vec3::splat(4.0)).floor();
+                let o = vec3(on_edge.x + 0.5 * (i % 2) as f32, 0.0, on_edge.z);
+                Ray::new(o, direction(&mut rng, i) * (0.5 + rng.next_f32()))
+            }
+        };
+        let t_max = bound(&mut rng, wide, &ray);
+        out.push((ray, t_max));
+    }
+    out
+}
+
+/// Checks `occluded` (the packet query, or a clone of it) on packets of 1 to 8 rays
+/// against the single-ray query; returns how many rays were occluded.
+fn check(wide: &WideBvh, rays: &[(Ray, f32)], occluded: impl Fn(&[Ray], &[f32]) -> u32) -> usize {
+    let mut start = 0;
+    let mut blocked = 0;
+    for size in (1..=PACKET).cycle() {
+        if start >= rays.len() {
+            break;
+        }
+        let chunk = &rays[start..(start + size).min(rays.len())];
+        start += size;
+        let (r, t): (Vec<Ray>, Vec<f32>) = chunk.iter().copied().unzip();
+        let got = occluded(&r, &t);
+        assert_eq!(got >> chunk.len(), 0, "bits past the packet");
+        for (i, (ray, t_max)) in chunk.iter().enumerate() {
+            let want = wide.any_hit(ray, *t_max, |_, _| true);
+            assert_eq!(got >> i & 1 == 1, want, "{ray:?} t_max {t_max}");
+            blocked += want as usize;
+        }
+    }
+    blocked
+}
+
+#[test]
+fn each_ray_of_a_packet_gets_its_single_ray_answer() {
+    let (_, wide) = scene();
+    let rays = rays(&wide, 40_000, 11);
+    let blocked = check(&wide, &rays, |r, t| wide.occluded_packet(r, t));
+    // Both answers are common, so neither a packet that hits everything nor one that
+    // hits nothing passes.
+    assert!(
+        blocked > rays.len() / 10 && blocked < rays.len() * 4 / 5,
+        "{blocked}"
+    );
+}
+
+#[test]
+fn packets_of_rays_along_shared_edges_never_slip_through() {
+    // Rays straight down onto the grid's edges and vertices: watertight for single
+    // rays, and each packet lane must agree.
+    let (_, wide) = scene();
+    let mut rays = Vec::new();
+    for i in -8..8 {
+        for j in -8..8 {
+            let (x, z) = (i as f32 * 0.5, j as f32 * 0.5);
+            for d in [
+                vec3(0.0, -1.0, 0.0),
+                vec3(-0.0, -1.0, -0.0),
+                vec3(1e-3, -1.0, 0.0),
+            ] {
+                rays.push((Ray::new(vec3(x, 20.0, z), d), f32::INFINITY));
+            }
+        }
+    }
+    let blocked = check(&wide, &rays, |r, t| wide.occluded_packet(r, t));
+    assert_eq!(blocked, rays.len(), "the grid covers these points");
+}
+
+#[test]
+fn the_dispatched_packet_query_matches_the_baseline_build() {
+    let (_, wide) = scene();
+    let rays = rays(&wide, 4_000, 12);
+    for chunk in rays.chunks(PACKET) {
+        let (r, t): (Vec<Ray>, Vec<f32>) = chunk.iter().copied().unzip();
+        assert_eq!(
+            wide.occluded_packet(&r, &t),
+            wide.occluded_packet_inlined(&r, &t)
+        );
+    }
+}
+
+/// Checks the closest hits of packets of 1 to 8 rays against `closest_hit_at`, bit for
+/// bit; returns how many rays hit.
+fn check_closest(wide: &WideBvh, rays: &[(Ray, f32)]) -> usize {
+    let bits = |h: &Option<(u32, u32, TriangleHit)>| {
+        h.map(|(p, l, h)| (p, l, [h.t, h.b0, h.b1, h.b2].map(f32::to_bits)))
+    };
+    let mut start = 0;
+    let mut hits = 0;
+    for size in (1..=PACKET).cycle() {
+        if start >= rays.len() {
+            break;
+        }
+        let chunk = &rays[start..(start + size).min(rays.len())];
+        start += size;
+        let (r, t): (Vec<Ray>, Vec<f32>) = chunk.iter().copied().unzip();
+        let got = wide.closest_packet(&r, &t);
+        assert_eq!(
+            got,
+            wide.closest_packet_inlined(&r, &t),
+            "the baseline build"
+        );
+        assert!(
+            got[chunk.len()..].iter().all(Option::is_none),
+            "hits past the packet"
+        );
+        for (i, (ray, t_max)) in chunk.iter().enumerate() {
+            let want = wide.closest_hit_at(ray, *t_max);
+            assert_eq!(bits(&got[i]), bits(&want), "{ray:?} t_max {t_max}");
+            hits += want.is_some() as usize;
+        }
+    }
+    hits
+}
+
+#[test]
+fn each_ray_of_a_packet_gets_its_single_ray_closest_hit() {
+    let (_, wide) = scene();
+    let rays = rays(&wide, 40_000, 13);
+    let hits = check_closest(&wide, &rays);
+    assert!(
+        hits > rays.len() / 10 && hits < rays.len() * 4 / 5,
+        "{hits}"
+    );
+}
+
+#[test]
+fn ties_on_shared_edges_go_to_the_lowest_index_in_packets() {
+    // Straight down onto the grid's edges: two triangles at exactly the same t.
+    let (_, wide) = scene();
+    let mut rays = Vec::new();
+    for i in -8..8 {
+        for j in -8..8 {
+            let o = vec3(i as f32 * 0.5, 20.0, j as f32 * 0.25);
+            rays.push((Ray::new(o, vec3(0.0, -1.0, 0.0)), f32::INFINITY));
+            rays.push((Ray::new(o, vec3(-0.0, -1.0, 0.0)), f32::INFINITY));
+        }
+    }
+    assert_eq!(check_closest(&wide, &rays), rays.len());
+}
+
+#[test]
+fn grazing_hits_near_t_zero_match_in_packets() {
+    // Packets of rays from points 10^-k off long or thin triangles far from the world
+    // origin, grazing them: hits whose f32 t lies within its rounding error of 0, which
+    // the scalar test decides again in f64 (as in leaf_tests'
+    // decided_lanes_bound_the_scalar_tests_t_error).
+    let mut rng = Lcg(17);
+    let (mut tris, mut rays) = (Vec::new(), Vec::new());
+    for i in 0..300 {
+        let far = [0.0, 10.0, 1e4][i % 3];
+        let centre = rng.vec() * 4.0 + Vec3::splat(far);
+        let thin = if i % 5 == 0 { 1e-3 } else { 1.0 };
+        let long = if i % 7 == 0 { 1e3 } else { 4.0 };
+        let (e1, e2) = (rng.dir() * long, rng.dir() * thin);
+        tris.push([centre, centre + e1, centre + e2]);
+        let n = e1.cross(e2).normalize();
+        for k in 0..8 {
+            let target = centre + e1 * rng.next_f32() * 0.5 + e2 * rng.next_f32() * 0.5;
+            let along = (e1.normalize() + n * 10f32.powi(-(k % 4))).normalize();
+            let off = n * 10f32.powi(-1 - (i as i32 + k) % 6);
+            let origin = target + off - along * 10f32.powi(-(k % 5));
+            rays.push((Ray::new(origin, along), f32::INFINITY));
+        }
+    }
+    let wide = build(&tris);
+    assert!(check_closest(&wide, &rays) > rays.len() / 2);
+    check(&wide, &rays, |r, t| wide.occluded_packet(r, t));
+}
+
+#[test]
+fn an_empty_tree_occludes_nothing() {
+    let wide = WideBvh::default();
+    let r = [Ray::new(Vec3::ZERO, Vec3::X); 3];
+    assert_eq!(wide.occluded_packet(&r, &[1.0; 3]), 0);
+    assert_eq!(wide.occluded_packet(&[], &[]), 0);
+    assert_eq!(wide.closest_packet(&r, &[1.0; 3]), [None; PACKET]);
+}
