@@ -186,7 +186,7 @@ impl WideBvh {
     }
 
     /// For up to [`PACKET`](super::PACKET) rays at once (a packet, traced with one ray
-    /// per SIMD lane; see [`super::wide_packet`]): bit `i` is set when a triangle lies on
+    /// per SIMD lane; see `accel::wide_packet`): bit `i` is set when a triangle lies on
     /// `rays[i]` in (0, `t_max[i]`), exactly when `any_hit(&rays[i], t_max[i], |_, _|
     /// true)` is true.
     pub fn occluded_packet(&self, rays: &[Ray], t_max: &[f32]) -> u32 {
@@ -194,7 +194,7 @@ impl WideBvh {
     }
 
     /// For up to [`PACKET`](super::PACKET) rays at once (a packet; see
-    /// [`super::wide_packet`]): entry `i` is exactly `closest_hit_at(&rays[i], t_max[i])`.
+    /// `accel::wide_packet`): entry `i` is exactly `closest_hit_at(&rays[i], t_max[i])`.
     pub fn closest_packet(&self, rays: &[Ray], t_max: &[f32]) -> PacketHits {
         closest_packet_dispatched(self, rays, t_max)
     }
