@@ -244,7 +244,9 @@ fn closest_hits_in_packets(
     surfaces: &mut Vec<Option<Surface>>,
 ) {
     use crate::accel::PACKET;
-    surfaces.clear();
+    // Every entry is written below: only the length is set here, so the buffer is not
+    // filled on one thread first (it keeps its length from depth to depth).
+    surfaces.truncate(rays.len());
     surfaces.resize_with(rays.len(), || None);
     surfaces
         .par_chunks_mut(PACKET)
