@@ -137,24 +137,31 @@ fn each_ray_of_a_packet_gets_its_single_ray_answer() {
     );
 }
 
+/// Rays from y = 20 down onto the grid at x = i / 2 and z = j `z_step` (i, j in -8..8):
+/// on its edges, vertices and diagonals among other points; one per direction of
+/// `dirs`, unbounded.
+fn rays_down_onto_the_grid(z_step: f32, dirs: &[Vec3]) -> Vec<(Ray, f32)> {
+    let mut rays = Vec::new();
+    for i in -8..8 {
+        for j in -8..8 {
+            let o = vec3(i as f32 * 0.5, 20.0, j as f32 * z_step);
+            rays.extend(dirs.iter().map(|&d| (Ray::new(o, d), f32::INFINITY)));
+        }
+    }
+    rays
+}
+
 #[test]
 fn packets_of_rays_along_shared_edges_never_slip_through() {
     // Rays straight down onto the grid's edges and vertices: watertight for single
     // rays, and each packet lane must agree.
     let (_, wide) = scene();
-    let mut rays = Vec::new();
-    for i in -8..8 {
-        for j in -8..8 {
-            let (x, z) = (i as f32 * 0.5, j as f32 * 0.5);
-            for d in [
-                vec3(0.0, -1.0, 0.0),
-                vec3(-0.0, -1.0, -0.0),
-                vec3(1e-3, -1.0, 0.0),
-            ] {
-                rays.push((Ray::new(vec3(x, 20.0, z), d), f32::INFINITY));
-            }
-        }
-    }
+    let down = [
+        vec3(0.0, -1.0, 0.0),
+        vec3(-0.0, -1.0, -0.0),
+        vec3(1e-3, -1.0, 0.0),
+    ];
+    let rays = rays_down_onto_the_grid(0.5, &down);
     let blocked = check(&wide, &rays, |r, t| wide.occluded_packet(r, t));
     assert_eq!(blocked, rays.len(), "the grid covers these points");
 }
@@ -221,14 +228,7 @@ fn each_ray_of_a_packet_gets_its_single_ray_closest_hit() {
 fn ties_on_shared_edges_go_to_the_lowest_index_in_packets() {
     // Straight down onto the grid's edges: two triangles at exactly the same t.
     let (_, wide) = scene();
-    let mut rays = Vec::new();
-    for i in -8..8 {
-        for j in -8..8 {
-            let o = vec3(i as f32 * 0.5, 20.0, j as f32 * 0.25);
-            rays.push((Ray::new(o, vec3(0.0, -1.0, 0.0)), f32::INFINITY));
-            rays.push((Ray::new(o, vec3(-0.0, -1.0, 0.0)), f32::INFINITY));
-        }
-    }
+    let rays = rays_down_onto_the_grid(0.25, &[vec3(0.0, -1.0, 0.0), vec3(-0.0, -1.0, 0.0)]);
     assert_eq!(check_closest(&wide, &rays), rays.len());
 }
 
