@@ -101,17 +101,25 @@ fn rays(wide: &WideBvh, n: usize, seed: u64) -> Vec<(Ray, f32)> {
     out
 }
 
-/// Checks `occluded` (the packet query, or a clone of it) on packets of 1 to 8 rays
-/// against the single-ray query; returns how many rays were occluded.
-fn check(wide: &WideBvh, rays: &[(Ray, f32)], occluded: impl Fn(&[Ray], &[f32]) -> u32) -> usize {
-    let mut start = 0;
-    let mut blocked = 0;
+/// `rays` cut into packets of 1, 2, ..., 8, 1, 2, ... rays, so that every packet size
+/// (and tail) is checked.
+fn packets_of_1_to_8(rays: &[(Ray, f32)]) -> Vec<&[(Ray, f32)]> {
+    let (mut packets, mut start) = (Vec::new(), 0);
     for size in (1..=PACKET).cycle() {
         if start >= rays.len() {
             break;
         }
-        let chunk = &rays[start..(start + size).min(rays.len())];
+        packets.push(&rays[start..(start + size).min(rays.len())]);
         start += size;
+    }
+    packets
+}
+
+/// Checks `occluded` (the packet query, or a clone of it) on packets of 1 to 8 rays
+/// against the single-ray query; returns how many rays were occluded.
+fn check(wide: &WideBvh, rays: &[(Ray, f32)], occluded: impl Fn(&[Ray], &[f32]) -> u32) -> usize {
+    let mut blocked = 0;
+    for chunk in packets_of_1_to_8(rays) {
         let (r, t): (Vec<Ray>, Vec<f32>) = chunk.iter().copied().unzip();
         let got = occluded(&r, &t);
         assert_eq!(got >> chunk.len(), 0, "bits past the packet");
@@ -185,14 +193,8 @@ fn check_closest(wide: &WideBvh, rays: &[(Ray, f32)]) -> usize {
     let bits = |h: &Option<(u32, u32, TriangleHit)>| {
         h.map(|(p, l, h)| (p, l, [h.t, h.b0, h.b1, h.b2].map(f32::to_bits)))
     };
-    let mut start = 0;
     let mut hits = 0;
-    for size in (1..=PACKET).cycle() {
-        if start >= rays.len() {
-            break;
-        }
-        let chunk = &rays[start..(start + size).min(rays.len())];
-        start += size;
+    for chunk in packets_of_1_to_8(rays) {
         let (r, t): (Vec<Ray>, Vec<f32>) = chunk.iter().copied().unzip();
         let got = wide.closest_packet(&r, &t);
         assert_eq!(
