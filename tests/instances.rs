@@ -324,3 +324,81 @@ fn metal_rough_spheres_share_one_sphere_under_the_two_level_bvh() {
         g.triangle_bytes()
     );
 }
+
+/// Rays from the camera's side through a grid of points, and segments from points
+/// on the floor to the light: hits on the flattened floor, on instances, on spheres,
+/// and misses; shadow segments blocked and clear.
+fn mixed_rays() -> Vec<(Ray, f32)> {
+    let mut rays = Vec::new();
+    for i in 0..24 {
+        for j in 0..24 {
+            let (u, v) = (i as f32 / 23.0, j as f32 / 23.0);
+            let eye = Vec3::new(-0.3 + 0.6 * v, 1.5, 6.0);
+            let target = Vec3::new(-3.0 + 6.0 * u, -2.5 + 5.0 * v, -1.0 + u * v);
+            rays.push((Ray::new(eye, target - eye), f32::INFINITY));
+            let floor = Vec3::new(-4.0 + 8.0 * u, -0.999, -4.0 + 8.0 * v);
+            let light = Vec3::new(2.0, 6.0, 4.0);
+            rays.push((Ray::new(floor, light - floor), 1.0));
+        }
+    }
+    rays
+}
+
+#[test]
+fn packet_queries_give_each_ray_its_answer_over_triangles_instances_and_spheres() {
+    // The render traces its queues 8 rays at a time: triangles as one packet, then
+    // instances and spheres ray by ray. Each ray must get the single-ray query's answer.
+    let spheres = "entities: [
+        Sphere((center: (0.5, 0.2, 2.0), radius: 0.4, material: \"matte\")),
+        Sphere((center: (-2.0, 1.0, -1.0), radius: 0.6, material: \"mirror\")), ";
+    let mut r = load(&scene(8).replace("entities: [", spheres));
+    share_meshes(&mut r);
+    r.prepare().expect("prepares");
+    let g = geometry(&r);
+    assert!(g.triangles_flattened() > 0 && !g.instanced.is_empty());
+    assert!(!g.sphere_bvh.nodes.is_empty());
+    let rays = mixed_rays();
+    let (mut kinds, mut blocked) = ([0; 4], 0);
+    for chunk in rays.chunks(7).flat_map(|c| [&c[..1], &c[1..]]) {
+        let (r, t): (Vec<Ray>, Vec<f32>) = chunk.iter().copied().unzip();
+        // One t_max per call, as the render passes it: split by bound.
+        for bound in [f32::INFINITY, 1.0] {
+            let (rs, _): (Vec<Ray>, Vec<f32>) = r
+                .iter()
+                .zip(&t)
+                .filter(|(_, tm)| **tm == bound)
+                .map(|(r, t)| (*r, *t))
+                .unzip();
+            if rs.is_empty() {
+                continue;
+            }
+            let mut hits = vec![None; rs.len()];
+            g.intersect_packet(&rs, bound, &mut hits);
+            let occluded = g.occluded_packet(&rs, bound);
+            for (i, (ray, hit)) in rs.iter().zip(&hits).enumerate() {
+                let want = g.intersect(ray, bound, &mut ());
+                assert_eq!(*hit, want, "{ray:?} t_max {bound}");
+                let k = match want {
+                    None => 0,
+                    Some(h) if h.kind == PrimKind::Sphere => 1,
+                    Some(h) if h.instance.is_some() => 2,
+                    Some(_) => 3,
+                };
+                kinds[k] += 1;
+                let want = g.occluded(ray, bound, &mut ());
+                assert_eq!(occluded >> i & 1 == 1, want, "{ray:?} t_max {bound}");
+                blocked += want as usize;
+            }
+        }
+    }
+    // Every kind of answer occurs, so a packet path that skipped one would fail.
+    assert!(
+        kinds.iter().all(|&k| k > 10),
+        "misses, spheres, instances, flattened: {kinds:?}"
+    );
+    assert!(
+        blocked > 100 && blocked < rays.len() - 100,
+        "{blocked} of {}",
+        rays.len()
+    );
+}
