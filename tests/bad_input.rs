@@ -335,8 +335,10 @@ fn the_cli_refuses_an_unwritable_output_folder_before_rendering() {
 /// the complete image it held.
 #[test]
 fn an_interrupted_first_pass_does_not_replace_the_output() {
-    // A first pass of many seconds: 1024x1024 pixels, 64 shadow rays each.
-    let scene = common::sphere_under_area_light(1024, "shadow_samples: 64");
+    // A first pass of many seconds: 1024x1024 pixels, 256 shadow rays each (about 8 s
+    // on one core of the 2026 test machine; with 64 it took 2.0 s, too close to the
+    // 1.5 s wait below for a faster machine).
+    let scene = common::sphere_under_area_light(1024, "shadow_samples: 256");
     let dir = scene_dir(&scene);
     std::fs::write(dir.path().join("out.png"), b"previous").unwrap();
     let child = Command::new(env!("CARGO_BIN_EXE_glint"))
