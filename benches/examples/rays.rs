@@ -8,8 +8,10 @@
 
 use std::hint::black_box;
 
-use glint::accel::{Aabb, Bvh, PACKET, Ray, SplitMethod, WideBvh};
-use glint_bench::{View, displaced_torus, incoherent_rays, primary_rays, shadow_rays};
+use glint::accel::{PACKET, Ray, WideBvh};
+use glint_bench::{
+    View, displaced_torus, glint_wide, glint_wide_hits, incoherent_rays, primary_rays, shadow_rays,
+};
 
 /// The queries the anchors bench times for glint: any-hit up to t = 1 for
 /// shadow rays, closest hit without a bound otherwise; returns the hits.
@@ -30,16 +32,7 @@ fn trace_rays(wide: &WideBvh, rays: &[Ray], shadow: bool) -> u32 {
             })
             .sum();
     }
-    rays.iter()
-        .map(|r| {
-            if shadow {
-                wide.any_hit(r, 1.0, |_, _| true)
-            } else {
-                wide.closest_hit(r, f32::INFINITY).is_some()
-            }
-        })
-        .map(u32::from)
-        .sum()
+    glint_wide_hits(wide, rays, shadow)
 }
 
 fn main() {
@@ -51,8 +44,7 @@ fn main() {
     };
     let (n, n_rays) = (arg(1, 158), arg(2, 1 << 16));
     let tris = displaced_torus(n);
-    let bounds: Vec<Aabb> = tris.iter().map(|t| Aabb::from_points(t)).collect();
-    let wide = WideBvh::collapse(&Bvh::build(&bounds, SplitMethod::SahBinned), &tris);
+    let wide = glint_wide(&tris);
     let view = View::torus();
     let side = (n_rays as f64).sqrt() as usize;
     let sets = [

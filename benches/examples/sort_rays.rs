@@ -9,21 +9,10 @@
 use std::hint::black_box;
 use std::time::Instant;
 
-use glint::accel::{Aabb, Bvh, Ray, SplitMethod, WideBvh};
-use glint_bench::{View, displaced_torus, incoherent_rays, primary_rays, shadow_rays};
-
-fn trace(wide: &WideBvh, rays: &[Ray], shadow: bool) -> u32 {
-    rays.iter()
-        .map(|r| {
-            if shadow {
-                wide.any_hit(r, 1.0, |_, _| true)
-            } else {
-                wide.closest_hit(r, f32::INFINITY).is_some()
-            }
-        })
-        .map(u32::from)
-        .sum()
-}
+use glint::accel::{Aabb, Ray};
+use glint_bench::{
+    View, displaced_torus, glint_wide, glint_wide_hits, incoherent_rays, primary_rays, shadow_rays,
+};
 
 fn spread(v: u32) -> u64 {
     let mut x = v as u64 & 0x3ff;
@@ -61,8 +50,7 @@ fn main() {
     };
     let (n, n_rays, rounds) = (arg(1, 158), arg(2, 1 << 18), arg(3, 5));
     let tris = displaced_torus(n);
-    let bounds: Vec<Aabb> = tris.iter().map(|t| Aabb::from_points(t)).collect();
-    let wide = WideBvh::collapse(&Bvh::build(&bounds, SplitMethod::SahBinned), &tris);
+    let wide = glint_wide(&tris);
     let view = View::torus();
     // Render-like sets: from the primary hits in pixel order, a shadow ray to the light
     // and the mirror reflection.
@@ -91,13 +79,13 @@ fn main() {
         let (mut a, mut s, mut b) = (vec![], vec![], vec![]);
         for _ in 0..rounds {
             let t = Instant::now();
-            let h1 = black_box(trace(&wide, &rays, shadow));
+            let h1 = black_box(glint_wide_hits(&wide, &rays, shadow));
             a.push(t.elapsed().as_secs_f64() * 1e3);
             let t = Instant::now();
             let sorted = black_box(sort(&rays, &wide.bounds));
             s.push(t.elapsed().as_secs_f64() * 1e3);
             let t = Instant::now();
-            let h2 = black_box(trace(&wide, &sorted, shadow));
+            let h2 = black_box(glint_wide_hits(&wide, &sorted, shadow));
             b.push(t.elapsed().as_secs_f64() * 1e3);
             assert_eq!(h1, h2);
         }

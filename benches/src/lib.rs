@@ -6,7 +6,9 @@
 use std::path::{Path, PathBuf};
 
 use glam::{Vec3, vec3};
-use glint::accel::{Bvh, Ray, RayShear, TwoLevelBvh, intersect_triangle_sheared};
+use glint::accel::{
+    Aabb, Bvh, Ray, RayShear, SplitMethod, TwoLevelBvh, WideBvh, intersect_triangle_sheared,
+};
 use glint::test_util::Lcg;
 
 pub mod embree;
@@ -193,6 +195,27 @@ pub fn glint_occluded(bvh: &Bvh, tris: &[[Vec3; 3]], ray: &Ray) -> bool {
         let [a, b, c] = tris[p as usize];
         intersect_triangle_sheared(&s, ray.origin, a, b, c, 1.0).is_some()
     })
+}
+
+/// glint's 8-wide BVH over `tris`, built as a render builds it (binned SAH, collapsed).
+pub fn glint_wide(tris: &[[Vec3; 3]]) -> WideBvh {
+    let bounds: Vec<Aabb> = tris.iter().map(|t| Aabb::from_points(t)).collect();
+    WideBvh::collapse(&Bvh::build(&bounds, SplitMethod::SahBinned), tris)
+}
+
+/// Traces `rays` one at a time through `wide` as the anchors time glint: any hit in
+/// (0, 1) for shadow rays, else the closest hit; returns how many rays hit.
+pub fn glint_wide_hits(wide: &WideBvh, rays: &[Ray], shadow: bool) -> u32 {
+    rays.iter()
+        .map(|r| {
+            if shadow {
+                wide.any_hit(r, 1.0, |_, _| true)
+            } else {
+                wide.closest_hit(r, f32::INFINITY).is_some()
+            }
+        })
+        .map(u32::from)
+        .sum()
 }
 
 /// The first file in `dir` whose name ends with `.{ext}` (in name order).
