@@ -133,6 +133,25 @@ fn shade_hits_reuses_its_shadow_buffers_without_keeping_old_rays() {
 }
 
 #[test]
+fn shade_hits_overwrites_what_the_last_depth_left_in_its_radiance_buffer() {
+    // The buffer is reused across depths and not cleared first: every entry must be
+    // written, and entries past the queue dropped.
+    for queue_shadows in [true, false] {
+        let mut world = shade_world(queue_shadows);
+        world.resource_mut::<Wavefront>().ray_radiance = vec![Vec3::splat(7.0); 3];
+        run(&mut world, shade_hits);
+        let expected = if queue_shadows {
+            Vec3::ZERO
+        } else {
+            phong_closed_form()
+        };
+        let wf = world.resource::<Wavefront>();
+        assert_eq!(wf.ray_radiance.len(), 1, "queue_shadows {queue_shadows}");
+        assert_close(wf.ray_radiance[0], expected);
+    }
+}
+
+#[test]
 fn shade_hits_adds_the_closed_form_radiance_without_shadow_rays() {
     let mut world = shade_world(false);
     run(&mut world, shade_hits);
