@@ -304,15 +304,16 @@ impl PacketRays {
             let g = &wide.leaves.groups[group + i];
             // Only the lanes holding triangles: padding would pass no ray anyway.
             for l in 0..(count - i * LANES).min(LANES) {
-                let candidates = self.candidates(s, g, l);
-                let mut kept = candidates.mask & left;
+                // The mask alone (the values' vector work is dropped): few rays are
+                // kept, and the scalar test per kept ray costs less than the values
+                // per triangle (Cornell direct: 872 -> 839 instructions per ray).
+                let mut kept = self.candidates(s, g, l).mask & left;
                 while kept != 0 {
                     let r = kept.trailing_zeros() as usize;
                     kept &= kept - 1;
                     let (shear, o) = self.scalar(s, r);
                     let tri = g.triangle(l);
-                    if candidates
-                        .hit(r, tri, degenerate, &shear, o, self.bound[r])
+                    if intersect_triangle_flagged(&shear, o, tri, self.bound[r], degenerate)
                         .is_some()
                     {
                         left &= !(1 << r);
