@@ -373,7 +373,7 @@ impl PacketRays {
                     let p = wide.prim_at(group + i, l);
                     if best[r].is_none_or(|(bp, _, bh)| h.t < bh.t || (h.t == bh.t && p < bp)) {
                         self.cull[r] = h.t;
-                        self.bound[r] = h.t.next_up().next_up().next_up().min(limit[r]);
+                        self.bound[r] = three_ulps_up(h.t).min(limit[r]);
                         best[r] = Some((p, ((group + i) * LANES + l) as u32, h));
                     }
                 }
@@ -432,10 +432,12 @@ impl PacketCandidates {
         if !(t > 0.0 && t < t_max) {
             return None;
         }
-        if !clear_of_zero(t, det, self.sizes.map(|s| s[r])) {
+        // Lane `r` of each array, not a copy of the arrays (`map` copied them all).
+        let [pz, xy, z] = &self.sizes;
+        if !clear_of_zero(t, det, [pz[r], xy[r], z[r]]) {
             return scalar();
         }
-        let [u, v, w] = self.e.map(|e| e[r]);
+        let [u, v, w] = [self.e[0][r], self.e[1][r], self.e[2][r]];
         Some(TriangleHit {
             t,
             b0: u * inv_det,
@@ -448,6 +450,19 @@ impl PacketCandidates {
 /// Each ray's closest hit in a packet: the triangle's index, where it sits in the
 /// leaves (`group * LANES + lane`) and the hit, as [`WideBvh::closest_hit_at`] gives it.
 pub type PacketHits = [Option<(u32, u32, TriangleHit)>; PACKET];
+
+/// `t.next_up().next_up().next_up()` for a hit distance (`t > 0`, not NaN): three
+/// steps up the bit pattern while that stays finite (positive floats order as their
+/// bits), else the steps themselves.
+#[inline(always)]
+fn three_ulps_up(t: f32) -> f32 {
+    let bits = t.to_bits();
+    if bits < f32::MAX.to_bits() - 2 {
+        f32::from_bits(bits + 3)
+    } else {
+        t.next_up().next_up().next_up()
+    }
+}
 
 /// Sort key of child `c` entered at `t` (not NaN, not below zero): by t, then child.
 #[inline(always)]
@@ -588,12 +603,14 @@ impl WideBvh {
                 if h == 0 {
                     continue;
                 }
-                let mut nearest = f32::INFINITY;
-                for (r, &t) in t.iter().enumerate() {
+                // Lane by lane then a reduction, without a branch per ray.
+                let mut met = [f32::INFINITY; PACKET];
+                for (r, m) in met.iter_mut().enumerate() {
                     if h & (1 << r) != 0 {
-                        nearest = nearest.min(t);
+                        *m = t[r];
                     }
                 }
+                let nearest = met.iter().fold(f32::INFINITY, |n, &t| n.min(t));
                 (t_near[c], hits[c]) = (t, h);
                 let k = key(nearest, c);
                 let mut i = order.len();
