@@ -127,20 +127,36 @@ impl PacketRays {
             }
             (p.cull[r], p.bound[r]) = (t_max, t_max);
         }
-        // Lane by lane, for the compiler to vectorize: the same f32 operations as
-        // `Vec3::recip` and `RayShear::new`'s choice of axes.
+        // Lane by lane, in loops of their own for the compiler to vectorize (with the
+        // choice of axes in the same loop, the divisions stayed scalar): the same f32
+        // operations as `Vec3::recip` and `RayShear::new`'s choice of axes.
+        for axis in 0..3 {
+            for r in 0..PACKET {
+                p.inv_dir[axis][r] = 1.0 / p.dir[axis][r];
+            }
+        }
         for r in 0..PACKET {
             let [x, y, z] = [p.dir[0][r], p.dir[1][r], p.dir[2][r]];
-            (p.inv_dir[0][r], p.inv_dir[1][r], p.inv_dir[2][r]) = (1.0 / x, 1.0 / y, 1.0 / z);
             let (ax, ay, az) = (x.abs(), y.abs(), z.abs());
-            let key = if ax >= ay && ax >= az {
-                (x < 0.0) as u32
-            } else if ay >= az {
-                2 + (y < 0.0) as u32
+            // kz = 0 if x dominates, else 1 if y does, else 2; the swap bit is the sign
+            // of dir[kz] (`RayShear::new`'s comparisons, as selects).
+            let x_max = ax >= ay && ax >= az;
+            let y_max = !x_max && ay >= az;
+            let d_kz = if x_max {
+                x
+            } else if y_max {
+                y
             } else {
-                4 + (z < 0.0) as u32
+                z
             };
-            p.axes_key[r] = key;
+            let kz = if x_max {
+                0
+            } else if y_max {
+                2
+            } else {
+                4
+            };
+            p.axes_key[r] = kz + (d_kz < 0.0) as u32;
         }
         p
     }
