@@ -285,7 +285,7 @@ fn three_ulps_up_is_three_next_ups_for_every_hit_distance() {
         f32::MAX.next_down().next_down(),
         f32::MAX.next_down().next_down().next_down(),
     ];
-    ts.extend((0..10_000).map(|_| f32::from_bits(1 + rng.below(0x7f7f_ffff) as u32)));
+    ts.extend((0..10_000).map(|_| f32::from_bits(1 + rng.below(0x7f7f_ffff))));
     for t in ts {
         let expected = t.next_up().next_up().next_up();
         assert_eq!(three_ulps_up(t).to_bits(), expected.to_bits(), "t = {t:e}");
