@@ -619,14 +619,12 @@ impl WideBvh {
                 if h == 0 {
                     continue;
                 }
-                // Lane by lane then a reduction, without a branch per ray.
-                let mut met = [f32::INFINITY; PACKET];
-                for (r, m) in met.iter_mut().enumerate() {
+                let mut nearest = f32::INFINITY;
+                for (r, &t) in t.iter().enumerate() {
                     if h & (1 << r) != 0 {
-                        *m = t[r];
+                        nearest = nearest.min(t);
                     }
                 }
-                let nearest = met.iter().fold(f32::INFINITY, |n, &t| n.min(t));
                 (t_near[c], hits[c]) = (t, h);
                 let k = key(nearest, c);
                 let mut i = order.len();
