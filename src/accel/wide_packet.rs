@@ -55,27 +55,49 @@ fn first_lanes(n: usize) -> u32 {
 }
 
 /// The per-ray constants of a packet, one lane per ray; lanes past the packet's rays
-/// hold zeros and the first ray's shear (never active).
+/// hold zeros (never active).
 pub(super) struct PacketRays {
     /// Origin, world axes.
     origin: [Lanes; 3],
+    /// Direction, world axes (the scalar test's `RayShear::dir`).
+    dir: [Lanes; 3],
     /// 1 / direction, world axes (the box test's).
     inv_dir: [Lanes; 3],
     /// Each ray's box cull distance (the single-ray traversal's `t_max`).
     cull: Lanes,
     /// Each ray's bound of the triangle test.
     bound: Lanes,
-    /// The triangle test's shear (`RayShear::{sx, sy, sz}`).
+    /// Each ray's permuted axes as `axes_of` reads them: `2 * kz + (dir[kz] < 0)`.
+    axes_key: [u32; PACKET],
+    /// Rays of the packet.
+    len: usize,
+}
+
+/// The permuted axes `[kx, ky, kz]` of a key of [`PacketRays::axes_key`], as
+/// `RayShear::new` picks them.
+#[inline(always)]
+fn axes_of(key: u32) -> [usize; 3] {
+    let kz = (key >> 1) as usize;
+    let (kx, ky) = ((kz + 1) % 3, (kz + 2) % 3);
+    if key & 1 != 0 {
+        [ky, kx, kz]
+    } else {
+        [kx, ky, kz]
+    }
+}
+
+/// The triangle test's constants of the rays of a packet with one permuted axis order
+/// (a sub-packet), lane by lane: `RayShear`'s shear and the origin in that order
+/// (`RayLeaf`'s). Lanes of rays with other axes hold junk (never active).
+struct Shear {
+    /// The permuted axes `[kx, ky, kz]`.
+    axes: [usize; 3],
+    /// `RayShear::{sx, sy, sz}`: the same f32 divisions, lane by lane.
     sx: Lanes,
     sy: Lanes,
     sz: Lanes,
-    /// Origin in each ray's own permuted axis order (`RayLeaf`'s).
+    /// Origin in the permuted axis order.
     origin_k: [Lanes; 3],
-    /// The scalar test's per-ray constants.
-    shears: [RayShear; PACKET],
-    origins: [Vec3; PACKET],
-    /// Rays of the packet.
-    len: usize,
 }
 
 impl PacketRays {
@@ -90,52 +112,100 @@ impl PacketRays {
         );
         let mut p = PacketRays {
             origin: [[0.0; PACKET]; 3],
+            dir: [[0.0; PACKET]; 3],
             inv_dir: [[0.0; PACKET]; 3],
             cull: [0.0; PACKET],
             bound: [0.0; PACKET],
-            sx: [0.0; PACKET],
-            sy: [0.0; PACKET],
-            sz: [0.0; PACKET],
-            origin_k: [[0.0; PACKET]; 3],
-            shears: [RayShear::new(&rays[0]); PACKET],
-            origins: [rays[0].origin; PACKET],
+            axes_key: [0; PACKET],
             len: rays.len(),
         };
-        // Lanes past the rays keep zeros and the first ray's shear (never active).
         for (r, (ray, &t_max)) in rays.iter().zip(t_max).enumerate() {
-            let s = RayShear::new(ray);
-            let (o, inv) = (ray.origin.to_array(), ray.dir.recip().to_array());
+            let (o, d) = (ray.origin.to_array(), ray.dir.to_array());
             for axis in 0..3 {
                 p.origin[axis][r] = o[axis];
-                p.inv_dir[axis][r] = inv[axis];
+                p.dir[axis][r] = d[axis];
             }
-            for (k, axis) in [s.kx, s.ky, s.kz].into_iter().enumerate() {
-                p.origin_k[k][r] = o[axis];
-            }
-            (p.sx[r], p.sy[r], p.sz[r]) = (s.sx, s.sy, s.sz);
             (p.cull[r], p.bound[r]) = (t_max, t_max);
-            (p.shears[r], p.origins[r]) = (s, ray.origin);
+        }
+        // Lane by lane, in loops of their own for the compiler to vectorize (with the
+        // choice of axes in the same loop, the divisions stayed scalar): the same f32
+        // operations as `Vec3::recip` and `RayShear::new`'s choice of axes.
+        for axis in 0..3 {
+            for r in 0..PACKET {
+                p.inv_dir[axis][r] = 1.0 / p.dir[axis][r];
+            }
+        }
+        for r in 0..PACKET {
+            let [x, y, z] = [p.dir[0][r], p.dir[1][r], p.dir[2][r]];
+            let (ax, ay, az) = (x.abs(), y.abs(), z.abs());
+            // kz = 0 if x dominates, else 1 if y does, else 2; the swap bit is the sign
+            // of dir[kz] (`RayShear::new`'s comparisons, as selects).
+            let x_max = ax >= ay && ax >= az;
+            let y_max = !x_max && ay >= az;
+            let d_kz = if x_max {
+                x
+            } else if y_max {
+                y
+            } else {
+                z
+            };
+            let kz = if x_max {
+                0
+            } else if y_max {
+                2
+            } else {
+                4
+            };
+            p.axes_key[r] = kz + (d_kz < 0.0) as u32;
         }
         p
     }
 
-    /// The rays whose permuted axes are ray `r`'s (kx and kz decide ky).
+    /// The rays whose permuted axes are ray `r`'s.
     #[inline(always)]
     fn same_axes(&self, r: usize) -> u32 {
-        let key = |s: &RayShear| s.kx | s.kz << 2;
-        let k = key(&self.shears[r]);
+        let k = self.axes_key[r];
         let mut class = 0;
-        for (i, s) in self.shears.iter().enumerate() {
-            class |= ((key(s) == k) as u32) << i;
+        for (i, &key) in self.axes_key.iter().enumerate() {
+            class |= ((key == k) as u32) << i;
         }
         class
     }
 
-    /// The permuted axes of ray `r`.
+    /// The triangle test's constants for the rays with the permuted axes of ray `r`.
     #[inline(always)]
-    fn axes(&self, r: usize) -> [usize; 3] {
-        let s = &self.shears[r];
-        [s.kx, s.ky, s.kz]
+    fn shear(&self, r: usize) -> Shear {
+        let axes = axes_of(self.axes_key[r]);
+        let [kx, ky, kz] = axes;
+        let mut s = Shear {
+            axes,
+            sx: [0.0; PACKET],
+            sy: [0.0; PACKET],
+            sz: [0.0; PACKET],
+            origin_k: [self.origin[kx], self.origin[ky], self.origin[kz]],
+        };
+        let (dx, dy, dz) = (&self.dir[kx], &self.dir[ky], &self.dir[kz]);
+        for r in 0..PACKET {
+            (s.sx[r], s.sy[r], s.sz[r]) = (dx[r] / dz[r], dy[r] / dz[r], 1.0 / dz[r]);
+        }
+        s
+    }
+
+    /// Ray `r`'s `RayShear` (of sub-packet `s`) and origin, for the scalar test.
+    #[inline(always)]
+    fn scalar(&self, s: &Shear, r: usize) -> (RayShear, Vec3) {
+        let [kx, ky, kz] = s.axes;
+        let lane = |v: &[Lanes; 3]| Vec3::new(v[0][r], v[1][r], v[2][r]);
+        let shear = RayShear {
+            kx,
+            ky,
+            kz,
+            sx: s.sx[r],
+            sy: s.sy[r],
+            sz: s.sz[r],
+            dir: lane(&self.dir),
+        };
+        (shear, lane(&self.origin))
     }
 
     /// Each ray's entry distance into child `c` of `node` (junk where it misses) and
@@ -172,19 +242,15 @@ impl PacketRays {
         (t_near, u32x8::from(hit).to_bitmask())
     }
 
-    /// The rays (of those with axes `[kx, ky, kz]`) that the scalar test may accept on
-    /// lane `l` of `g` within their `bound`: `RayLeaf::shear` and `candidates` with the
-    /// triangle in the lanes' place, the same f32 operations in the same order (bit
-    /// clear only when the scalar test rejects the ray before its division).
+    /// The rays (of sub-packet `s`) that the scalar test may accept on lane `l` of `g`
+    /// within their `bound`, with each ray's values of the scalar test (`Candidates`'s,
+    /// rays in the lanes' place), so that most kept rays need not run it:
+    /// `RayLeaf::shear` and `candidates` with the triangle in the lanes' place, the
+    /// same f32 operations in the same order (bit clear only when the scalar test
+    /// rejects the ray before its division).
     #[inline(always)]
-    fn prefilter(&self, g: &TriGroup, l: usize, axes: [usize; 3]) -> u32 {
-        self.candidates(g, l, axes).mask
-    }
-
-    /// [`Self::prefilter`] with each ray's values of the scalar test (`Candidates`'s,
-    /// rays in the lanes' place), so that most kept rays need not run it.
-    #[inline(always)]
-    fn candidates(&self, g: &TriGroup, l: usize, [kx, ky, kz]: [usize; 3]) -> PacketCandidates {
+    fn candidates(&self, s: &Shear, g: &TriGroup, l: usize) -> PacketCandidates {
+        let [kx, ky, kz] = s.axes;
         let mut out = PacketCandidates {
             mask: 0,
             zero: 0,
@@ -199,12 +265,8 @@ impl PacketRays {
         let (a, b, c) = (p(0), p(1), p(2));
         let mut bits = [0u32; PACKET];
         for (r, bit) in bits.iter_mut().enumerate() {
-            let [ox, oy, oz] = [
-                self.origin_k[0][r],
-                self.origin_k[1][r],
-                self.origin_k[2][r],
-            ];
-            let (sx, sy, sz) = (self.sx[r], self.sy[r], self.sz[r]);
+            let [ox, oy, oz] = [s.origin_k[0][r], s.origin_k[1][r], s.origin_k[2][r]];
+            let (sx, sy, sz) = (s.sx[r], s.sy[r], s.sz[r]);
             let (a_x, a_y, a_z) = (a[0] - ox, a[1] - oy, a[2] - oz);
             let (b_x, b_y, b_z) = (b[0] - ox, b[1] - oy, b[2] - oz);
             let (c_x, c_y, c_z) = (c[0] - ox, c[1] - oy, c[2] - oz);
@@ -233,15 +295,15 @@ impl PacketRays {
             // `Sheared::sizes`: maxps itself, as there.
             let max = |m: f32, x: &f32| if m > x.abs() { m } else { x.abs() };
             let pz = [a_z, b_z, c_z].iter().fold(0.0, max);
-            let s = [ax, ay, bx, by, cx, cy].iter().fold(0.0, max);
-            [out.sizes[0][r], out.sizes[1][r], out.sizes[2][r]] = [pz, s, sz.abs() * pz];
+            let xy = [ax, ay, bx, by, cx, cy].iter().fold(0.0, max);
+            [out.sizes[0][r], out.sizes[1][r], out.sizes[2][r]] = [pz, xy, sz.abs() * pz];
         }
         out.mask = u32x8::from(bits).to_bitmask();
         out.zero = u32x8::from(zeros).to_bitmask();
         out
     }
 
-    /// Tests rays `rays` (with axes `axes`) against the leaf at group `group` with the
+    /// Tests rays `rays` (of sub-packet `s`) against the leaf at group `group` with the
     /// lane count `count`; returns the rays it occludes.
     #[inline(always)]
     fn occluded_in_leaf(
@@ -249,7 +311,7 @@ impl PacketRays {
         wide: &WideBvh,
         group: usize,
         count: u32,
-        axes: [usize; 3],
+        s: &Shear,
         rays: u32,
     ) -> u32 {
         let (count, degenerate) = leaf_count(count);
@@ -258,12 +320,17 @@ impl PacketRays {
             let g = &wide.leaves.groups[group + i];
             // Only the lanes holding triangles: padding would pass no ray anyway.
             for l in 0..(count - i * LANES).min(LANES) {
-                let mut kept = self.prefilter(g, l, axes) & left;
+                // The mask alone (the values' vector work is dropped): few rays are
+                // kept, and the scalar test per kept ray costs less than the values
+                // per triangle (Cornell direct: 872 -> 839 instructions per ray).
+                let mut kept = self.candidates(s, g, l).mask & left;
                 while kept != 0 {
                     let r = kept.trailing_zeros() as usize;
                     kept &= kept - 1;
-                    let (s, o, t_max) = (&self.shears[r], self.origins[r], self.bound[r]);
-                    if intersect_triangle_flagged(s, o, g.triangle(l), t_max, degenerate).is_some()
+                    let (shear, o) = self.scalar(s, r);
+                    let tri = g.triangle(l);
+                    if intersect_triangle_flagged(&shear, o, tri, self.bound[r], degenerate)
+                        .is_some()
                     {
                         left &= !(1 << r);
                     }
@@ -291,7 +358,7 @@ impl PacketRays {
         u32x8::from(bits).to_bitmask()
     }
 
-    /// Tests rays `rays` (with axes `axes`) against the leaf at group `group` with the
+    /// Tests rays `rays` (of sub-packet `s`) against the leaf at group `group` with the
     /// lane count `count`, keeping in `best` each ray's least (t, index) hit as
     /// `ClosestLeaves` does, and lowering its cull distance and bound with it.
     #[inline(always)]
@@ -299,7 +366,7 @@ impl PacketRays {
         &mut self,
         wide: &WideBvh,
         (group, count): (usize, u32),
-        axes: [usize; 3],
+        s: &Shear,
         rays: u32,
         best: &mut PacketHits,
         limit: &Lanes,
@@ -308,19 +375,21 @@ impl PacketRays {
         for i in 0..groups_for(count) {
             let g = &wide.leaves.groups[group + i];
             for l in 0..(count - i * LANES).min(LANES) {
-                let candidates = self.candidates(g, l, axes);
+                let candidates = self.candidates(s, g, l);
                 let mut kept = candidates.mask & rays;
                 while kept != 0 {
                     let r = kept.trailing_zeros() as usize;
                     kept &= kept - 1;
-                    let (s, o, bound) = (&self.shears[r], self.origins[r], self.bound[r]);
-                    let Some(h) = candidates.hit(r, g.triangle(l), degenerate, s, o, bound) else {
+                    let (shear, o) = self.scalar(s, r);
+                    let tri = g.triangle(l);
+                    let Some(h) = candidates.hit(r, tri, degenerate, &shear, o, self.bound[r])
+                    else {
                         continue;
                     };
                     let p = wide.prim_at(group + i, l);
                     if best[r].is_none_or(|(bp, _, bh)| h.t < bh.t || (h.t == bh.t && p < bp)) {
                         self.cull[r] = h.t;
-                        self.bound[r] = h.t.next_up().next_up().next_up().min(limit[r]);
+                        self.bound[r] = three_ulps_up(h.t).min(limit[r]);
                         best[r] = Some((p, ((group + i) * LANES + l) as u32, h));
                     }
                 }
@@ -379,10 +448,12 @@ impl PacketCandidates {
         if !(t > 0.0 && t < t_max) {
             return None;
         }
-        if !clear_of_zero(t, det, self.sizes.map(|s| s[r])) {
+        // Lane `r` of each array, not a copy of the arrays (`map` copied them all).
+        let [pz, xy, z] = &self.sizes;
+        if !clear_of_zero(t, det, [pz[r], xy[r], z[r]]) {
             return scalar();
         }
-        let [u, v, w] = self.e.map(|e| e[r]);
+        let [u, v, w] = [self.e[0][r], self.e[1][r], self.e[2][r]];
         Some(TriangleHit {
             t,
             b0: u * inv_det,
@@ -395,6 +466,19 @@ impl PacketCandidates {
 /// Each ray's closest hit in a packet: the triangle's index, where it sits in the
 /// leaves (`group * LANES + lane`) and the hit, as [`WideBvh::closest_hit_at`] gives it.
 pub type PacketHits = [Option<(u32, u32, TriangleHit)>; PACKET];
+
+/// `t.next_up().next_up().next_up()` for a hit distance (`t > 0`, not NaN): three
+/// steps up the bit pattern while that stays finite (positive floats order as their
+/// bits), else the steps themselves.
+#[inline(always)]
+fn three_ulps_up(t: f32) -> f32 {
+    let bits = t.to_bits();
+    if bits < f32::MAX.to_bits() - 2 {
+        f32::from_bits(bits + 3)
+    } else {
+        t.next_up().next_up().next_up()
+    }
+}
 
 /// Sort key of child `c` entered at `t` (not NaN, not below zero): by t, then child.
 #[inline(always)]
@@ -414,18 +498,18 @@ impl WideBvh {
         let mut occluded = 0;
         while todo != 0 {
             let first = todo.trailing_zeros() as usize;
-            let (axes, class) = (p.axes(first), p.same_axes(first) & todo);
-            occluded |= self.occluded_sub_packet(&p, axes, class);
+            let class = p.same_axes(first) & todo;
+            occluded |= self.occluded_sub_packet(&p, &p.shear(first), class);
             todo &= !class;
         }
         occluded
     }
 
-    /// The rays of `rays` (all with axes `axes`) that a triangle occludes: the any-hit
+    /// The rays of `rays` (all of sub-packet `s`) that a triangle occludes: the any-hit
     /// traversal of [`WideBvh::traverse`] with a mask of rays per entry, leaves before
     /// interior children, until every ray is occluded or the stack is empty.
     #[inline(always)]
-    fn occluded_sub_packet(&self, p: &PacketRays, axes: [usize; 3], rays: u32) -> u32 {
+    fn occluded_sub_packet(&self, p: &PacketRays, s: &Shear, rays: u32) -> u32 {
         let mut active = rays;
         let mut stack: ArrayVec<(u32, u32), STACK_SIZE> = ArrayVec::new();
         let mut next = Some((0u32, active));
@@ -455,7 +539,7 @@ impl WideBvh {
                 let m = hits[c] & active;
                 if m != 0 {
                     let (child, count) = (node.child[c] as usize, node.count[c]);
-                    active &= !p.occluded_in_leaf(self, child, count, axes, m);
+                    active &= !p.occluded_in_leaf(self, child, count, s, m);
                     if active == 0 {
                         return rays;
                     }
@@ -490,14 +574,14 @@ impl WideBvh {
         let mut todo = first_lanes(p.len);
         while todo != 0 {
             let first = todo.trailing_zeros() as usize;
-            let (axes, class) = (p.axes(first), p.same_axes(first) & todo);
-            self.closest_sub_packet(&mut p, axes, class, &limit, &mut best);
+            let (shear, class) = (p.shear(first), p.same_axes(first) & todo);
+            self.closest_sub_packet(&mut p, &shear, class, &limit, &mut best);
             todo &= !class;
         }
         best
     }
 
-    /// The closest hits of `rays` (all with axes `axes`) into `best`: the closest-hit
+    /// The closest hits of `rays` (all of sub-packet `s`) into `best`: the closest-hit
     /// traversal of [`WideBvh::traverse`] with a mask of rays and their entry distances
     /// per entry, children ordered by the least entry distance of the rays meeting them.
     /// Which hit wins does not depend on that order (see `ClosestLeaves`).
@@ -505,7 +589,7 @@ impl WideBvh {
     fn closest_sub_packet(
         &self,
         p: &mut PacketRays,
-        axes: [usize; 3],
+        s: &Shear,
         rays: u32,
         limit: &Lanes,
         best: &mut PacketHits,
@@ -569,7 +653,7 @@ impl WideBvh {
                 let m = hits[c] & p.within::<true>(&t_near[c]);
                 if m != 0 {
                     let leaf = (node.child[c] as usize, node.count[c]);
-                    p.closest_in_leaf(self, leaf, axes, m, best, limit);
+                    p.closest_in_leaf(self, leaf, s, m, best, limit);
                 }
             }
         }

@@ -253,7 +253,11 @@ fn closest_hits_in_packets(
         .zip(rays.par_chunks(PACKET))
         .with_min_len(CHUNK / PACKET)
         .for_each(|(surfaces, rays)| {
-            let packet: [Ray; PACKET] = std::array::from_fn(|i| rays[i.min(rays.len() - 1)].ray);
+            // Only the packet's rays are copied (the rest stay zero, never read).
+            let mut packet = [Ray::new(Vec3::ZERO, Vec3::ZERO); PACKET];
+            for (p, q) in packet.iter_mut().zip(rays) {
+                *p = q.ray;
+            }
             let mut hits = [None; PACKET];
             let n = rays.len();
             geometry.intersect_packet(&packet[..n], f32::INFINITY, &mut hits[..n]);
@@ -533,8 +537,11 @@ pub fn trace_shadow_rays(
         // Consecutive shadow rays (of neighbouring pixels, to the same light) as packets.
         wf.shadow_rays
             .trace_packets(&mut wf.ray_radiance, |rays, arrived| {
-                let packet: [Ray; crate::accel::PACKET] =
-                    std::array::from_fn(|i| rays[i.min(rays.len() - 1)].ray);
+                // Only the packet's rays are copied (the rest stay zero, never read).
+                let mut packet = [Ray::new(Vec3::ZERO, Vec3::ZERO); crate::accel::PACKET];
+                for (p, s) in packet.iter_mut().zip(rays) {
+                    *p = s.ray;
+                }
                 let blocked = geometry.occluded_packet(&packet[..rays.len()], t_max);
                 for (i, (s, a)) in rays.iter().zip(arrived).enumerate() {
                     *a = if blocked & (1 << i) != 0 {
