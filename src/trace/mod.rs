@@ -9,6 +9,7 @@ pub mod lights;
 pub mod log;
 pub mod materials;
 pub mod plan;
+mod shade_lanes;
 pub mod shadow;
 pub mod surface;
 pub mod wavefront;

@@ -15,11 +15,12 @@ use super::lights::{LightSample, Lights};
 use super::log::{HitObserver, LightObserver, RayTrace, TraceLog};
 use super::materials::Materials;
 use super::plan::RenderPlan;
+use super::shade_lanes::shade_chunks_in_lanes;
 pub use super::shadow::{CHUNK, ShadowQueue, ShadowRay};
 use super::surface::{SHADOW_EPSILON, Surface, offset_ray_origin_towards, surface_at};
 use crate::accel::Ray;
 use crate::sampling::{Sampler, pixel_mode, pixel_sample_offset, samples_taken};
-use crate::scene::{Camera, PixelSampling, Settings};
+use crate::scene::{Camera, PixelSampling, Settings, ShadingModel};
 use crate::shade::{Model, Shading, ShadingInput, WithModel};
 use crate::stats::{RenderStats, Stage};
 use crate::trace::geometry::SceneGeometry;
@@ -296,23 +297,23 @@ pub fn blend_alpha(settings: &Settings, alpha: f32, depth: u32) -> f32 {
 }
 
 /// What shading one hit needs besides the ray and its hit.
-struct ShadeContext<'a> {
-    settings: &'a Settings,
-    shading: Shading<'a>,
-    sampler: Sampler,
-    lights: &'a Lights,
-    materials: &'a Materials,
-    region: &'a PassRegion,
-    depth: u32,
-    queue_shadows: bool,
+pub(super) struct ShadeContext<'a> {
+    pub(super) settings: &'a Settings,
+    pub(super) shading: Shading<'a>,
+    pub(super) sampler: Sampler,
+    pub(super) lights: &'a Lights,
+    pub(super) materials: &'a Materials,
+    pub(super) region: &'a PassRegion,
+    pub(super) depth: u32,
+    pub(super) queue_shadows: bool,
 }
 
 /// Where one shading point's shadow rays start: [`Surface::shadow_ray_to`]'s origin, the
 /// same for every light sample, so it is offset once per point, not once per sample.
-struct ShadowOrigin(Vec3);
+pub(super) struct ShadowOrigin(Vec3);
 
 impl ShadowOrigin {
-    fn of(surface: &Surface) -> Self {
+    pub(super) fn of(surface: &Surface) -> Self {
         // `offset_ray_origin(.., ng, w = ng)` without its test of the side (always `ng`).
         Self(offset_ray_origin_towards(
             surface.p,
@@ -323,7 +324,7 @@ impl ShadowOrigin {
     }
 
     /// `surface.shadow_ray_to(target)`, bit for bit.
-    fn ray_to(&self, target: Vec3) -> Ray {
+    pub(super) fn ray_to(&self, target: Vec3) -> Ray {
         Ray {
             origin: self.0,
             dir: target - self.0,
@@ -397,7 +398,7 @@ fn shade_ray<M: Model>(
 /// `shadow_rays`, both in queue order; returns what `O` observed. Both are the last
 /// depth's buffers, refilled so that their allocations are reused. Chunks, not rays, own
 /// the shadow-ray vectors: no allocation per ray, and a deterministic queue.
-fn shade_chunks<O: LightObserver, M: Model>(
+pub(super) fn shade_chunks<O: LightObserver, M: Model>(
     cx: &ShadeContext,
     model: M,
     rays: &[QueuedRay],
@@ -492,8 +493,11 @@ pub fn shade_hits(
     let (rays, hits) = (&wf.rays, &wf.hits);
     let (radiance, shadows) = (&mut wf.ray_radiance, &mut wf.shadow_rays);
     match log {
-        // The render's loop has a copy for Lambertian without per-sample branches on the
-        // settings (see `Shading::dispatch`).
+        // Lambertian, the render benchmark's model: hits in lanes.
+        None if cx.shading.enabled && cx.shading.model == ShadingModel::Lambertian => {
+            shade_chunks_in_lanes(&cx, rays, hits, radiance, shadows);
+        }
+        // The other models' loop reads the model per sample (see `Shading::dispatch`).
         None => cx.shading.dispatch(ShadeRun {
             cx: &cx,
             rays,
