@@ -1,6 +1,7 @@
 //! A counter-based random number generator and the named dimensions it is indexed by.
 
 use glam::Vec2;
+use multiversion::multiversion;
 
 use super::sobol::{SobolSeeds, sobol_1d, sobol_1d_seeded, sobol_2d, sobol_2d_seeded};
 use crate::scene::SamplerKind;
@@ -284,6 +285,87 @@ impl SlotSampler {
             }
             _ => Vec2::from(sobol_2d_seeded(self.base.wrapping_add(k), &self.seeds)),
         }
+    }
+}
+
+/// Shading points side by side in [`SlotLanes`].
+pub const SLOT_LANES: usize = 8;
+
+/// One light slot's samples at [`SLOT_LANES`] shading points side by side (lanes
+/// without a point give 0): the numbers of each lane's [`SlotSampler`], with the
+/// independent kind's hashes done for all lanes in one loop (vectorised in its AVX2 clone).
+#[derive(Clone, Copy, Debug)]
+pub struct SlotLanes {
+    slots: [Option<SlotSampler>; SLOT_LANES],
+    /// Each lane's `PointSampler` prefix (0 without a slot).
+    prefix: [u64; SLOT_LANES],
+    /// Each lane's dimension of sample 0 (0 without a slot).
+    first: [u32; SLOT_LANES],
+    /// Whether every slot is of the independent kind with packed dimensions, so that
+    /// sample k's dimension is `first + 2 k` (for k below the packed field's bound).
+    packed: bool,
+}
+
+impl SlotLanes {
+    /// The lanes of `slots`.
+    pub fn new(slots: [Option<SlotSampler>; SLOT_LANES]) -> Self {
+        let mut prefix = [0; SLOT_LANES];
+        let mut first = [0; SLOT_LANES];
+        let mut packed = true;
+        for (j, s) in slots.iter().enumerate() {
+            if let Some(s) = s {
+                match (s.point.kind, s.first_dim) {
+                    (SamplerKind::Independent, Some(d)) => {
+                        (prefix[j], first[j]) = (s.point.prefix, d)
+                    }
+                    _ => packed = false,
+                }
+            }
+        }
+        Self {
+            slots,
+            prefix,
+            first,
+            packed,
+        }
+    }
+
+    /// Sample `k` of each lane's slot, 1D ([`SlotSampler::light1`]).
+    pub fn light1(&self, k: u32, out: &mut [f32; SLOT_LANES]) {
+        if self.packed && k < 1 << LIGHT_SAMPLE_BITS {
+            units(&self.prefix, &self.first, 2 * k, out);
+        } else {
+            for (o, s) in out.iter_mut().zip(&self.slots) {
+                *o = s.map_or(0.0, |s| s.light1(k));
+            }
+        }
+    }
+
+    /// Sample `k` of each lane's slot, 2D ([`SlotSampler::light2`]).
+    pub fn light2(&self, k: u32, u: &mut [f32; SLOT_LANES], v: &mut [f32; SLOT_LANES]) {
+        if self.packed && k < 1 << LIGHT_SAMPLE_BITS {
+            units(&self.prefix, &self.first, 2 * k, u);
+            units(&self.prefix, &self.first, 2 * k + 1, v);
+        } else {
+            for ((u, v), s) in u.iter_mut().zip(v.iter_mut()).zip(&self.slots) {
+                let uv = s.map_or(Vec2::ZERO, |s| s.light2(k));
+                (*u, *v) = (uv.x, uv.y);
+            }
+        }
+    }
+}
+
+/// `PointSampler::get1` of dimension `first + add` in each lane; lanes whose prefix and
+/// first dimension are 0 get some number, unused.
+#[multiversion(targets("x86_64+avx2+fma", "x86_64+sse4.2"))]
+fn units(
+    prefix: &[u64; SLOT_LANES],
+    first: &[u32; SLOT_LANES],
+    add: u32,
+    out: &mut [f32; SLOT_LANES],
+) {
+    for ((o, &p), &f) in out.iter_mut().zip(prefix).zip(first) {
+        *o = unit_from_hash(mix64(p ^ u64::from(f + add)));
     }
 }
 

@@ -17,12 +17,13 @@ use multiversion::multiversion;
 use rayon::prelude::*;
 
 use super::shadow::{CHUNK, ShadowQueue, ShadowRay};
-use super::surface::Surface;
-use super::wavefront::{QueuedRay, ShadeContext, ShadowOrigin, blend_alpha};
-use crate::sampling::{PointSampler, SlotSampler};
+use super::surface::{MIN_OFFSET_COORDINATE, Surface};
+use super::wavefront::{QueuedRay, ShadeContext, blend_alpha};
+use crate::accel::Ray;
+use crate::sampling::{PointSampler, SLOT_LANES, SlotLanes};
 
 /// Hits shaded together.
-pub const LANES: usize = 8;
+pub const LANES: usize = SLOT_LANES;
 
 /// One f32 per lane.
 type Lanes = [f32; LANES];
@@ -35,6 +36,8 @@ type Lanes3 = [Lanes; 3];
 #[derive(Clone, Copy, Debug, Default)]
 struct HitLanes {
     p: Lanes3,
+    p_error: Lanes3,
+    ng: Lanes3,
     n: Lanes3,
     kd: Lanes3,
     w: Lanes3,
@@ -80,6 +83,49 @@ fn shade_sample(hits: &HitLanes, position: &Lanes3, color: &Lanes3, out: &mut Sa
             let d = if lit && d.is_finite() { d } else { 0.0 };
             out.c[a][j] = d * hits.w[a][j];
         }
+    }
+}
+
+/// Each lane's shadow-ray origin, `ShadowOrigin::of` bit for bit: `p` pushed out of its
+/// error box along `ng` (`offset_ray_origin_towards(p, p_error, ng, ng)`), then rounded
+/// one float away from the surface, with `f32::next_up` / `next_down` and the
+/// subnormal guard written as selects so that the lanes need no branch.
+#[multiversion(targets("x86_64+avx2+fma", "x86_64+sse4.2"))]
+fn shadow_origins(p: &Lanes3, p_error: &Lanes3, ng: &Lanes3, out: &mut Lanes3) {
+    for j in 0..LANES {
+        let offset = (ng[0][j].abs() * p_error[0][j])
+            + (ng[1][j].abs() * p_error[1][j])
+            + (ng[2][j].abs() * p_error[2][j]);
+        for a in 0..3 {
+            let (x, side) = (p[a][j] + offset * ng[a][j], ng[a][j]);
+            out[a][j] = away_from_surface(x, side);
+        }
+    }
+}
+
+/// One coordinate of `offset_ray_origin_towards`'s rounding: `x` moved one float
+/// towards `side`'s sign, or to the least offset coordinate if it is below that.
+#[inline(always)]
+fn away_from_surface(x: f32, side: f32) -> f32 {
+    let least = side != 0.0 && x.abs() < MIN_OFFSET_COORDINATE;
+    let (up, down) = (side > 0.0, side < 0.0);
+    // Past `least`, x is NaN or not 0: `next_up` adds one to the bits of a positive x
+    // and takes one from a negative one, `next_down` the other way round; each keeps
+    // NaN and the infinity it moves towards.
+    let grow = (x > 0.0) == up;
+    let keep = x.is_nan() || (grow && x.is_infinite());
+    let bits = x.to_bits();
+    let stepped = f32::from_bits(if grow {
+        bits.wrapping_add(1)
+    } else {
+        bits.wrapping_sub(1)
+    });
+    if least {
+        MIN_OFFSET_COORDINATE.copysign(side)
+    } else if (up || down) && !keep {
+        stepped
+    } else {
+        x
     }
 }
 
@@ -153,6 +199,8 @@ pub(super) fn shade_group(
         let kd = cx.materials.kd_at(surface.material, surface.uv);
         for a in 0..3 {
             lanes.p[a][j] = surface.p[a];
+            lanes.p_error[a][j] = surface.p_error[a];
+            lanes.ng[a][j] = surface.ng[a];
             lanes.n[a][j] = surface.n[a];
             lanes.kd[a][j] = kd[a];
             lanes.w[a][j] = w[a];
@@ -167,17 +215,24 @@ pub(super) fn shade_group(
     let inv = 1.0 / n as f32;
     let path = |j: usize| rays.get(j).map_or(0, |q| q.path);
     // Each lane's sample numbers of one area light (zeros in lanes without a hit).
-    let slots = |light: usize| -> [Option<SlotSampler>; LANES] {
-        std::array::from_fn(|j| points[j].map(|p| p.slot((cx.depth, path(j), light as u32), n)))
+    let slots = |light: usize| {
+        SlotLanes::new(std::array::from_fn(|j| {
+            points[j].map(|p| p.slot((cx.depth, path(j), light as u32), n))
+        }))
     };
-    samples.clear();
+    // The group's samples, light by light, into `samples` (its entries are overwritten:
+    // it keeps its length from group to group, so nothing is zeroed or copied twice).
+    let mut count = 0;
+    let mut shade = |position: &Lanes3, color: &Lanes3| {
+        if samples.len() == count {
+            samples.push(SampleLanes::default());
+        }
+        shade_sample(&lanes, position, color, &mut samples[count]);
+        count += 1;
+    };
     let mut position = Lanes3::default();
     let mut color = Lanes3::default();
-    let mut shade = |position: &Lanes3, color: &Lanes3| {
-        let mut sample = SampleLanes::default();
-        shade_sample(&lanes, position, color, &mut sample);
-        samples.push(sample);
-    };
+    let (mut u, mut v) = (Lanes::default(), Lanes::default());
     for p in &lights.points {
         let (pp, pc) = (p.position.to_array(), p.color.to_array());
         let position = pp.map(|x| [x; LANES]);
@@ -188,7 +243,7 @@ pub(super) fn shade_group(
     for (i, l) in lights.segments.iter().enumerate() {
         let slots = slots(base + i);
         for k in 0..n {
-            let u: Lanes = std::array::from_fn(|j| slots[j].map_or(0.0, |s| s.light1(k)));
+            slots.light1(k, &mut u);
             segment_lanes(l, &u, inv, &mut position, &mut color);
             shade(&position, &color);
         }
@@ -197,27 +252,25 @@ pub(super) fn shade_group(
     for (i, q) in lights.parallelograms.iter().enumerate() {
         let slots = slots(base + i);
         for k in 0..n {
-            let mut u = Lanes::default();
-            let mut v = Lanes::default();
-            for j in 0..LANES {
-                if let Some(s) = slots[j] {
-                    let uv = s.light2(k);
-                    (u[j], v[j]) = (uv.x, uv.y);
-                }
-            }
+            slots.light2(k, &mut u, &mut v);
             parallelogram_lanes(q, &u, &v, inv, &mut position, &mut color);
             shade(&position, &color);
         }
     }
+    let samples = &samples[..count];
+    let mut origins = Lanes3::default();
+    if cx.queue_shadows {
+        shadow_origins(&lanes.p, &lanes.p_error, &lanes.ng, &mut origins);
+    }
     // Back to ray order: each hit's samples in light order, as the scalar loop.
     for (j, ((q, hit), r)) in rays.iter().zip(hits).zip(out).enumerate() {
-        let Some(surface) = hit else {
+        if hit.is_none() {
             *r = q.weight * s.background;
             continue;
         };
         let mut direct = Vec3::ZERO;
-        let mut origin = None;
-        for sample in samples.iter() {
+        let origin = Vec3::new(origins[0][j], origins[1][j], origins[2][j]);
+        for sample in samples {
             if !sample.ok[j] {
                 continue;
             }
@@ -226,14 +279,16 @@ pub(super) fn shade_group(
                 continue;
             }
             if cx.queue_shadows {
-                let origin = origin.get_or_insert_with(|| ShadowOrigin::of(surface));
                 let target = Vec3::new(
                     sample.position[0][j],
                     sample.position[1][j],
                     sample.position[2][j],
                 );
                 shadows.push(ShadowRay {
-                    ray: origin.ray_to(target),
+                    ray: Ray {
+                        origin,
+                        dir: target - origin,
+                    },
                     contribution: c,
                     owner: (first + j) as u32,
                 });
@@ -280,14 +335,13 @@ mod tests {
     use glam::Vec2;
 
     use super::*;
-    use crate::accel::Ray;
     use crate::sampling::Sampler;
     use crate::scene::{ParallelogramLight, PointLight, SamplerKind, SegmentLight, Settings};
     use crate::shade::Shading;
     use crate::shade::models::LambertianModel;
     use crate::trace::lights::Lights;
     use crate::trace::materials::{MaterialData, Materials};
-    use crate::trace::wavefront::{PassRegion, shade_chunks};
+    use crate::trace::wavefront::{PassRegion, ShadowOrigin, shade_chunks};
 
     /// A small deterministic generator (xorshift), numbers in [-1, 1).
     struct Numbers(u64);
@@ -406,6 +460,65 @@ mod tests {
             })
             .collect();
         (radiance.iter().map(|&r| v(r)).collect(), shadows)
+    }
+
+    #[test]
+    fn shadow_origins_in_lanes_are_the_scalar_ones() {
+        // Coordinates and normals around every case of the rounding: zero, below and at
+        // the least offset coordinate, ordinary, the largest float, infinities, NaN.
+        let m = MIN_OFFSET_COORDINATE;
+        let values = [
+            0.0,
+            -0.0,
+            1e-40,
+            -1e-40,
+            m,
+            -m,
+            m.next_down(),
+            -m.next_down(),
+            m.next_up(),
+            0.3,
+            -2.5,
+            1e6,
+            f32::MAX,
+            f32::MIN,
+            f32::INFINITY,
+            f32::NEG_INFINITY,
+            f32::NAN,
+            -f32::NAN,
+        ];
+        let mut surfaces = Vec::new();
+        for &x in &values {
+            for &side in &values {
+                for e in [0.0, 1e-7, f32::INFINITY] {
+                    surfaces.push(Surface {
+                        p: Vec3::new(x, -x, 0.5),
+                        p_error: Vec3::new(e, 0.0, 1e-8),
+                        ng: Vec3::new(side, 0.6, -side),
+                        n: Vec3::Y,
+                        uv: Vec2::ZERO,
+                        material: 0,
+                    });
+                }
+            }
+        }
+        for group in surfaces.chunks(LANES) {
+            let mut lanes = HitLanes::default();
+            for (j, s) in group.iter().enumerate() {
+                for a in 0..3 {
+                    lanes.p[a][j] = s.p[a];
+                    lanes.p_error[a][j] = s.p_error[a];
+                    lanes.ng[a][j] = s.ng[a];
+                }
+            }
+            let mut origins = Lanes3::default();
+            shadow_origins(&lanes.p, &lanes.p_error, &lanes.ng, &mut origins);
+            for (j, s) in group.iter().enumerate() {
+                let lane = [0, 1, 2].map(|a| origins[a][j].to_bits());
+                let scalar = ShadowOrigin::of(s).ray_to(Vec3::ZERO).origin;
+                assert_eq!(lane, scalar.to_array().map(f32::to_bits), "{s:?}");
+            }
+        }
     }
 
     #[test]
