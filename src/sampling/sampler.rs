@@ -344,14 +344,28 @@ impl SlotLanes {
     /// Sample `k` of each lane's slot, 2D ([`SlotSampler::light2`]).
     pub fn light2(&self, k: u32, u: &mut [f32; SLOT_LANES], v: &mut [f32; SLOT_LANES]) {
         if self.packed && k < 1 << LIGHT_SAMPLE_BITS {
-            units(&self.prefix, &self.first, 2 * k, u);
-            units(&self.prefix, &self.first, 2 * k + 1, v);
+            units2(&self.prefix, &self.first, 2 * k, u, v);
         } else {
             for ((u, v), s) in u.iter_mut().zip(v.iter_mut()).zip(&self.slots) {
                 let uv = s.map_or(Vec2::ZERO, |s| s.light2(k));
                 (*u, *v) = (uv.x, uv.y);
             }
         }
+    }
+}
+
+/// [`units`] of dimensions `first + add` into `u` and `first + add + 1` into `v`.
+#[multiversion(targets("x86_64+avx2+fma", "x86_64+sse4.2"))]
+fn units2(
+    prefix: &[u64; SLOT_LANES],
+    first: &[u32; SLOT_LANES],
+    add: u32,
+    u: &mut [f32; SLOT_LANES],
+    v: &mut [f32; SLOT_LANES],
+) {
+    for j in 0..SLOT_LANES {
+        u[j] = unit_from_hash(mix64(prefix[j] ^ u64::from(first[j] + add)));
+        v[j] = unit_from_hash(mix64(prefix[j] ^ u64::from(first[j] + add + 1)));
     }
 }
 

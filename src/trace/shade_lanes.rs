@@ -43,13 +43,14 @@ struct HitLanes {
     w: Lanes3,
 }
 
-/// One light sample over the lanes: where it is, what it adds (`c`), and whether the
-/// direction to it could be normalized (`ok`; the scalar loop skips the sample if not).
+/// One light sample over the lanes: where it is, what it adds (`c`), and whether it
+/// adds anything (`keep`: the direction to it could be normalized, else the scalar loop
+/// skips the sample, and `c` is not all zeros).
 #[derive(Clone, Copy, Debug, Default)]
 pub(super) struct SampleLanes {
     position: Lanes3,
     c: Lanes3,
-    ok: [bool; LANES],
+    keep: [bool; LANES],
 }
 
 /// `x` clamped to [0, 1], NaN to 0: `sampling::light`'s `unit`, the same comparisons.
@@ -73,7 +74,8 @@ fn shade_sample(hits: &HitLanes, position: &Lanes3, color: &Lanes3, out: &mut Sa
         let lz = position[2][j] - hits.p[2][j];
         // glam: `dot` left to right, `length_recip` = 1 / sqrt, then a multiply.
         let rcp = 1.0 / ((lx * lx) + (ly * ly) + (lz * lz)).sqrt();
-        out.ok[j] = rcp.is_finite() && rcp > 0.0;
+        // `is_finite() && > 0` as two comparisons (NaN fails both).
+        let ok = rcp > 0.0 && rcp < f32::INFINITY;
         let (lx, ly, lz) = (lx * rcp, ly * rcp, lz * rcp);
         let cos = (hits.n[0][j] * lx) + (hits.n[1][j] * ly) + (hits.n[2][j] * lz);
         // `lit` is `cos > 0`; there `cos.max(0.0)` is `cos` itself.
@@ -83,6 +85,7 @@ fn shade_sample(hits: &HitLanes, position: &Lanes3, color: &Lanes3, out: &mut Sa
             let d = if lit && d.is_finite() { d } else { 0.0 };
             out.c[a][j] = d * hits.w[a][j];
         }
+        out.keep[j] = ok && (out.c[0][j] != 0.0 || out.c[1][j] != 0.0 || out.c[2][j] != 0.0);
     }
 }
 
@@ -271,13 +274,10 @@ pub(super) fn shade_group(
         let mut direct = Vec3::ZERO;
         let origin = Vec3::new(origins[0][j], origins[1][j], origins[2][j]);
         for sample in samples {
-            if !sample.ok[j] {
+            if !sample.keep[j] {
                 continue;
             }
             let c = Vec3::new(sample.c[0][j], sample.c[1][j], sample.c[2][j]);
-            if c == Vec3::ZERO {
-                continue;
-            }
             if cx.queue_shadows {
                 let target = Vec3::new(
                     sample.position[0][j],
