@@ -81,6 +81,29 @@ impl Sampler {
         }
     }
 
+    /// `pixel2(pixels[j], sample)` in each lane `j`: for the independent and stratified
+    /// kinds, the hashes of all lanes in one loop (vectorised in its AVX2 clone).
+    pub fn pixel2_lanes(
+        &self,
+        pixels: &[u32; SLOT_LANES],
+        sample: u32,
+        u: &mut [f32; SLOT_LANES],
+        v: &mut [f32; SLOT_LANES],
+    ) {
+        match self.kind {
+            SamplerKind::Sobol => {
+                for ((u, v), &pixel) in u.iter_mut().zip(v.iter_mut()).zip(pixels) {
+                    (*u, *v) = self.pixel2(pixel, sample).into();
+                }
+            }
+            SamplerKind::Independent | SamplerKind::Stratified => {
+                let mut prefix = [0; SLOT_LANES];
+                prefixes(self.seed_hash, pixels, sample, &mut prefix);
+                units2(&prefix, &[DIM_PIXEL; SLOT_LANES], 0, u, v);
+            }
+        }
+    }
+
     /// Sample `k` of `n` on a light, 1D. Independent: dimension `light_dim(.., k)`.
     /// Stratified: point k of a scrambled Sobol' set per (pixel, sample, slot), so the n
     /// samples of one shading point are stratified. Sobol': point `index * n + k` of the
@@ -351,6 +374,14 @@ impl SlotLanes {
                 (*u, *v) = (uv.x, uv.y);
             }
         }
+    }
+}
+
+/// `Sampler::prefix(pixels[j], sample)` in each lane.
+#[multiversion(targets("x86_64+avx2+fma", "x86_64+sse4.2"))]
+fn prefixes(seed_hash: u64, pixels: &[u32; SLOT_LANES], sample: u32, out: &mut [u64; SLOT_LANES]) {
+    for (o, &pixel) in out.iter_mut().zip(pixels) {
+        *o = mix64(seed_hash ^ ((u64::from(pixel) << 32) | u64::from(sample)));
     }
 }
 

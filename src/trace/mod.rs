@@ -3,6 +3,7 @@
 //! optional trace log.
 
 pub mod camera;
+mod camera_samples;
 mod crossings;
 pub mod geometry;
 pub mod lights;

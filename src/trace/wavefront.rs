@@ -7,10 +7,10 @@
 //! ray of weight `w * (1 - alpha)`.
 
 use bevy_ecs::prelude::*;
-use glam::{Vec2, Vec3};
+use glam::Vec3;
 use rayon::prelude::*;
 
-use super::camera::CameraBasis;
+pub use super::camera_samples::{CameraSampleOffsets, generate_camera_samples};
 use super::lights::{LightSample, Lights};
 use super::log::{HitObserver, LightObserver, RayTrace, TraceLog};
 use super::materials::Materials;
@@ -19,8 +19,8 @@ use super::shade_lanes::shade_chunks_in_lanes;
 pub use super::shadow::{CHUNK, ShadowQueue, ShadowRay};
 use super::surface::{SHADOW_EPSILON, Surface, offset_ray_origin_towards, surface_at};
 use crate::accel::Ray;
-use crate::sampling::{Sampler, pixel_mode, pixel_sample_offset, samples_taken};
-use crate::scene::{Camera, PixelSampling, Settings, ShadingModel};
+use crate::sampling::Sampler;
+use crate::scene::{Settings, ShadingModel};
 use crate::shade::{Model, Shading, ShadingInput, WithModel};
 use crate::stats::{RenderStats, Stage};
 use crate::trace::geometry::SceneGeometry;
@@ -134,81 +134,6 @@ pub struct SampleRadiance {
     pub first_pixel: u32,
     /// Radiance of each camera sample of the region, one per pixel.
     pub values: Vec<Vec3>,
-}
-
-/// Where in its pixel each camera sample goes: the pixel centre unless the plan asks for
-/// sample patterns. The render and the debug recorder both ask it, so they agree.
-#[derive(Clone, Copy, Debug)]
-pub struct CameraSampleOffsets {
-    sampler: Sampler,
-    samples: u32,
-    mode: PixelSampling,
-    patterns: bool,
-}
-
-impl CameraSampleOffsets {
-    /// The offsets the settings and the plan call for.
-    pub fn new(settings: &Settings, plan: &RenderPlan) -> Self {
-        let mode = pixel_mode(settings);
-        Self {
-            sampler: Sampler::with_kind(settings.seed, settings.sampler),
-            samples: samples_taken(settings.pixel_samples, mode),
-            mode,
-            patterns: plan.pixel_patterns,
-        }
-    }
-
-    /// Offset within `pixel` of its camera sample `sample`, in [0, 1)^2.
-    pub fn of(&self, pixel: u32, sample: u32) -> Vec2 {
-        if self.patterns {
-            pixel_sample_offset(&self.sampler, pixel, sample, self.samples, self.mode)
-        } else {
-            Vec2::splat(0.5)
-        }
-    }
-}
-
-/// Generates one camera ray per pixel of the region, at its sample offset.
-pub fn generate_camera_samples(
-    settings: Res<Settings>,
-    plan: Res<RenderPlan>,
-    cameras: Query<&Camera>,
-    region: Res<PassRegion>,
-    mut wf: ResMut<Wavefront>,
-    mut radiance: ResMut<SampleRadiance>,
-    mut stats: ResMut<RenderStats>,
-) {
-    let Some(camera) = cameras.iter().next() else {
-        return;
-    };
-    let width = camera.width;
-    let basis = CameraBasis::new(camera);
-    let offsets = CameraSampleOffsets::new(&settings, &plan);
-    let wf = &mut *wf;
-    // Into the buffers of the last pass: their allocations are reused, not made anew.
-    (0..region.pixels)
-        .into_par_iter()
-        .with_min_len(CHUNK)
-        .map(|slot| {
-            let pixel = region.first_pixel + slot;
-            let offset = offsets.of(pixel, region.sample);
-            let (x, y) = ((pixel % width) as f32, (pixel / width) as f32);
-            QueuedRay {
-                ray: basis.ray(x + offset.x, y + offset.y),
-                weight: Vec3::ONE,
-                slot,
-                path: 0,
-            }
-        })
-        .collect_into_vec(&mut wf.rays);
-    let n = wf.rays.len();
-    stats.record(Stage::GenerateCameraSamples, n as u64);
-    stats.rays.camera += n as u64;
-    wf.depth = 0;
-    wf.next.clear();
-    radiance.first_pixel = region.first_pixel;
-    radiance.values.clear();
-    radiance.values.resize(n, Vec3::ZERO);
 }
 
 /// Each ray's closest hit and shading point into `surfaces`, in queue order; returns what
@@ -639,6 +564,7 @@ pub fn rays_pending(wf: &Wavefront) -> bool {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use glam::Vec2;
 
     #[test]
     fn shadow_origin_gives_the_surfaces_shadow_rays() {
