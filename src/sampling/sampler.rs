@@ -133,6 +133,21 @@ impl Sampler {
         }
     }
 
+    /// [`Self::at`] of `pixels[j]` in each lane `j`, the hashes in one loop.
+    pub fn at_lanes(&self, pixels: &[u32; SLOT_LANES], sample: u32) -> [PointSampler; SLOT_LANES] {
+        let extra = match self.kind {
+            SamplerKind::Sobol => Self::sobol_replica(sample).0,
+            SamplerKind::Independent | SamplerKind::Stratified => sample,
+        };
+        let mut prefix = [0; SLOT_LANES];
+        prefixes(self.seed_hash, pixels, extra, &mut prefix);
+        prefix.map(|prefix| PointSampler {
+            kind: self.kind,
+            sample,
+            prefix,
+        })
+    }
+
     /// The running hash after (seed, pixel, sample): `hash` without the dimension.
     fn prefix(&self, pixel: u32, sample: u32) -> u64 {
         // Chain the mixer over the inputs: each step is a bijection of the

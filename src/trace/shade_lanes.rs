@@ -50,7 +50,8 @@ struct HitLanes {
 pub(super) struct SampleLanes {
     position: Lanes3,
     c: Lanes3,
-    keep: [bool; LANES],
+    // As u32 (0 or 1), not bool: the lanes store it as one vector, bools one by one.
+    keep: [u32; LANES],
 }
 
 /// `x` clamped to [0, 1], NaN to 0: `sampling::light`'s `unit`, the same comparisons.
@@ -85,7 +86,8 @@ fn shade_sample(hits: &HitLanes, position: &Lanes3, color: &Lanes3, out: &mut Sa
             let d = if lit && d.is_finite() { d } else { 0.0 };
             out.c[a][j] = d * hits.w[a][j];
         }
-        out.keep[j] = ok && (out.c[0][j] != 0.0 || out.c[1][j] != 0.0 || out.c[2][j] != 0.0);
+        out.keep[j] =
+            u32::from(ok && (out.c[0][j] != 0.0 || out.c[1][j] != 0.0 || out.c[2][j] != 0.0));
     }
 }
 
@@ -194,6 +196,11 @@ pub(super) fn shade_group(
 ) {
     let s = cx.settings;
     let mut lanes = HitLanes::default();
+    let pixels = std::array::from_fn(|j| {
+        rays.get(j)
+            .map_or(0, |q| cx.region.first_pixel.wrapping_add(q.slot))
+    });
+    let at = cx.sampler.at_lanes(&pixels, cx.region.sample);
     let mut points: [Option<PointSampler>; LANES] = [None; LANES];
     for (j, (q, hit)) in rays.iter().zip(hits).enumerate() {
         let Some(surface) = hit else { continue };
@@ -208,10 +215,7 @@ pub(super) fn shade_group(
             lanes.kd[a][j] = kd[a];
             lanes.w[a][j] = w[a];
         }
-        points[j] = Some(
-            cx.sampler
-                .at(cx.region.first_pixel + q.slot, cx.region.sample),
-        );
+        points[j] = Some(at[j]);
     }
     let lights = cx.lights;
     let n = s.shadow_samples.max(1);
@@ -274,7 +278,7 @@ pub(super) fn shade_group(
         let mut direct = Vec3::ZERO;
         let origin = Vec3::new(origins[0][j], origins[1][j], origins[2][j]);
         for sample in samples {
-            if !sample.keep[j] {
+            if sample.keep[j] == 0 {
                 continue;
             }
             let c = Vec3::new(sample.c[0][j], sample.c[1][j], sample.c[2][j]);
