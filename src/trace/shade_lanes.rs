@@ -31,8 +31,8 @@ type Lanes = [f32; LANES];
 /// Three coordinates, each over the lanes.
 type Lanes3 = [Lanes; 3];
 
-/// What the model reads of the group's hits, in lanes (lanes without a hit hold zeros
-/// and are never read back).
+/// What the model reads of the group's hits, in lanes (lanes without a hit hold what
+/// an earlier group left there, or zeros, and are never read back).
 #[derive(Clone, Copy, Debug, Default)]
 struct HitLanes {
     p: Lanes3,
@@ -47,11 +47,18 @@ struct HitLanes {
 /// adds anything (`keep`: the direction to it could be normalized, else the scalar loop
 /// skips the sample, and `c` is not all zeros).
 #[derive(Clone, Copy, Debug, Default)]
-pub(super) struct SampleLanes {
+struct SampleLanes {
     position: Lanes3,
     c: Lanes3,
     // As u32 (0 or 1), not bool: the lanes store it as one vector, bools one by one.
     keep: [u32; LANES],
+}
+
+/// What a chunk's groups reuse, neither zeroed nor allocated per group.
+#[derive(Debug, Default)]
+struct Scratch {
+    lanes: HitLanes,
+    samples: Vec<SampleLanes>,
 }
 
 /// `x` clamped to [0, 1], NaN to 0: `sampling::light`'s `unit`, the same comparisons.
@@ -184,18 +191,18 @@ fn segment_lanes(
 
 /// Shades the group of up to [`LANES`] rays starting at queue index `first`: each ray's
 /// direct light into `out`, its shadow rays appended to `shadows`, exactly as
-/// `shade_ray` with `LambertianModel` and nothing observed. `samples` is scratch space.
-pub(super) fn shade_group(
+/// `shade_ray` with `LambertianModel` and nothing observed.
+fn shade_group(
     cx: &ShadeContext,
     first: usize,
     rays: &[QueuedRay],
     hits: &[Option<Surface>],
     out: &mut [Vec3],
     shadows: &mut Vec<ShadowRay>,
-    samples: &mut Vec<SampleLanes>,
+    scratch: &mut Scratch,
 ) {
+    let Scratch { lanes, samples } = scratch;
     let s = cx.settings;
-    let mut lanes = HitLanes::default();
     let pixels = std::array::from_fn(|j| {
         rays.get(j)
             .map_or(0, |q| cx.region.first_pixel.wrapping_add(q.slot))
@@ -234,7 +241,7 @@ pub(super) fn shade_group(
         if samples.len() == count {
             samples.push(SampleLanes::default());
         }
-        shade_sample(&lanes, position, color, &mut samples[count]);
+        shade_sample(lanes, position, color, &mut samples[count]);
         count += 1;
     };
     let mut position = Lanes3::default();
@@ -322,14 +329,14 @@ pub(super) fn shade_chunks_in_lanes(
         .zip(chunk_shadows.par_iter_mut())
         .enumerate()
         .for_each(|(c, (((rays, hits), out), shadows))| {
-            let mut samples = Vec::new();
+            let mut scratch = Scratch::default();
             let groups = rays
                 .chunks(LANES)
                 .zip(hits.chunks(LANES))
                 .zip(out.chunks_mut(LANES));
             for (g, ((rays, hits), out)) in groups.enumerate() {
                 let first = c * CHUNK + g * LANES;
-                shade_group(cx, first, rays, hits, out, shadows, &mut samples);
+                shade_group(cx, first, rays, hits, out, shadows, &mut scratch);
             }
         });
 }
