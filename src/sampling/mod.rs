@@ -11,5 +11,9 @@ pub mod sampler;
 pub mod sobol;
 
 pub use light::{sample_parallelogram_light, sample_segment_light};
-pub use pixel::{pixel_mode, pixel_sample_offset, samples_per_pixel, samples_taken};
-pub use sampler::{DIM_PIXEL, LightSlot, PointSampler, Sampler, SlotSampler, light_dim};
+pub use pixel::{
+    offset_of_jitter, pixel_mode, pixel_sample_offset, samples_per_pixel, samples_taken,
+};
+pub use sampler::{
+    DIM_PIXEL, LightSlot, PointSampler, SLOT_LANES, Sampler, SlotLanes, SlotSampler, light_dim,
+};

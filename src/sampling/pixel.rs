@@ -56,7 +56,11 @@ pub fn pixel_sample_offset(
     if n <= 1 {
         return Vec2::splat(0.5);
     }
-    let jitter = sampler.pixel2(pixel, sample);
+    offset_of_jitter(sampler.pixel2(pixel, sample), sample, n, mode)
+}
+
+/// [`pixel_sample_offset`] of `n > 1` samples once the sampler gave its point `jitter`.
+pub fn offset_of_jitter(jitter: Vec2, sample: u32, n: u32, mode: PixelSampling) -> Vec2 {
     match mode {
         PixelSampling::Uniform => jitter.min(Vec2::splat(BELOW_ONE)),
         PixelSampling::Stratified => {

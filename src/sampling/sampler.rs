@@ -1,6 +1,7 @@
 //! A counter-based random number generator and the named dimensions it is indexed by.
 
 use glam::Vec2;
+use multiversion::multiversion;
 
 use super::sobol::{SobolSeeds, sobol_1d, sobol_1d_seeded, sobol_2d, sobol_2d_seeded};
 use crate::scene::SamplerKind;
@@ -80,6 +81,29 @@ impl Sampler {
         }
     }
 
+    /// `pixel2(pixels[j], sample)` in each lane `j`: for the independent and stratified
+    /// kinds, the hashes of all lanes in one loop (vectorised in its AVX2 clone).
+    pub fn pixel2_lanes(
+        &self,
+        pixels: &[u32; SLOT_LANES],
+        sample: u32,
+        u: &mut [f32; SLOT_LANES],
+        v: &mut [f32; SLOT_LANES],
+    ) {
+        match self.kind {
+            SamplerKind::Sobol => {
+                for ((u, v), &pixel) in u.iter_mut().zip(v.iter_mut()).zip(pixels) {
+                    (*u, *v) = self.pixel2(pixel, sample).into();
+                }
+            }
+            SamplerKind::Independent | SamplerKind::Stratified => {
+                let mut prefix = [0; SLOT_LANES];
+                prefixes(self.seed_hash, pixels, sample, &mut prefix);
+                units2(&prefix, &[DIM_PIXEL; SLOT_LANES], 0, u, v);
+            }
+        }
+    }
+
     /// Sample `k` of `n` on a light, 1D. Independent: dimension `light_dim(.., k)`.
     /// Stratified: point k of a scrambled Sobol' set per (pixel, sample, slot), so the n
     /// samples of one shading point are stratified. Sobol': point `index * n + k` of the
@@ -107,6 +131,21 @@ impl Sampler {
             sample,
             prefix: self.prefix(pixel, extra),
         }
+    }
+
+    /// [`Self::at`] of `pixels[j]` in each lane `j`, the hashes in one loop.
+    pub fn at_lanes(&self, pixels: &[u32; SLOT_LANES], sample: u32) -> [PointSampler; SLOT_LANES] {
+        let extra = match self.kind {
+            SamplerKind::Sobol => Self::sobol_replica(sample).0,
+            SamplerKind::Independent | SamplerKind::Stratified => sample,
+        };
+        let mut prefix = [0; SLOT_LANES];
+        prefixes(self.seed_hash, pixels, extra, &mut prefix);
+        prefix.map(|prefix| PointSampler {
+            kind: self.kind,
+            sample,
+            prefix,
+        })
     }
 
     /// The running hash after (seed, pixel, sample): `hash` without the dimension.
@@ -284,6 +323,109 @@ impl SlotSampler {
             }
             _ => Vec2::from(sobol_2d_seeded(self.base.wrapping_add(k), &self.seeds)),
         }
+    }
+}
+
+/// Shading points side by side in [`SlotLanes`].
+pub const SLOT_LANES: usize = 8;
+
+/// One light slot's samples at [`SLOT_LANES`] shading points side by side (lanes
+/// without a point give 0): the numbers of each lane's [`SlotSampler`], with the
+/// independent kind's hashes done for all lanes in one loop (vectorised in its AVX2 clone).
+#[derive(Clone, Copy, Debug)]
+pub struct SlotLanes {
+    slots: [Option<SlotSampler>; SLOT_LANES],
+    /// Each lane's `PointSampler` prefix (0 without a slot).
+    prefix: [u64; SLOT_LANES],
+    /// Each lane's dimension of sample 0 (0 without a slot).
+    first: [u32; SLOT_LANES],
+    /// Whether every slot is of the independent kind with packed dimensions, so that
+    /// sample k's dimension is `first + 2 k` (for k below the packed field's bound).
+    packed: bool,
+}
+
+impl SlotLanes {
+    /// The lanes of `slots`.
+    pub fn new(slots: [Option<SlotSampler>; SLOT_LANES]) -> Self {
+        let mut prefix = [0; SLOT_LANES];
+        let mut first = [0; SLOT_LANES];
+        let mut packed = true;
+        for (j, s) in slots.iter().enumerate() {
+            if let Some(s) = s {
+                match (s.point.kind, s.first_dim) {
+                    (SamplerKind::Independent, Some(d)) => {
+                        (prefix[j], first[j]) = (s.point.prefix, d)
+                    }
+                    _ => packed = false,
+                }
+            }
+        }
+        Self {
+            slots,
+            prefix,
+            first,
+            packed,
+        }
+    }
+
+    /// Sample `k` of each lane's slot, 1D ([`SlotSampler::light1`]).
+    pub fn light1(&self, k: u32, out: &mut [f32; SLOT_LANES]) {
+        if self.packed && k < 1 << LIGHT_SAMPLE_BITS {
+            units(&self.prefix, &self.first, 2 * k, out);
+        } else {
+            for (o, s) in out.iter_mut().zip(&self.slots) {
+                *o = s.map_or(0.0, |s| s.light1(k));
+            }
+        }
+    }
+
+    /// Sample `k` of each lane's slot, 2D ([`SlotSampler::light2`]).
+    pub fn light2(&self, k: u32, u: &mut [f32; SLOT_LANES], v: &mut [f32; SLOT_LANES]) {
+        if self.packed && k < 1 << LIGHT_SAMPLE_BITS {
+            units2(&self.prefix, &self.first, 2 * k, u, v);
+        } else {
+            for ((u, v), s) in u.iter_mut().zip(v.iter_mut()).zip(&self.slots) {
+                let uv = s.map_or(Vec2::ZERO, |s| s.light2(k));
+                (*u, *v) = (uv.x, uv.y);
+            }
+        }
+    }
+}
+
+/// `Sampler::prefix(pixels[j], sample)` in each lane.
+#[multiversion(targets("x86_64+avx2+fma", "x86_64+sse4.2"))]
+fn prefixes(seed_hash: u64, pixels: &[u32; SLOT_LANES], sample: u32, out: &mut [u64; SLOT_LANES]) {
+    for (o, &pixel) in out.iter_mut().zip(pixels) {
+        *o = mix64(seed_hash ^ ((u64::from(pixel) << 32) | u64::from(sample)));
+    }
+}
+
+/// [`units`] of dimensions `first + add` into `u` and `first + add + 1` into `v`.
+#[multiversion(targets("x86_64+avx2+fma", "x86_64+sse4.2"))]
+fn units2(
+    prefix: &[u64; SLOT_LANES],
+    first: &[u32; SLOT_LANES],
+    add: u32,
+    u: &mut [f32; SLOT_LANES],
+    v: &mut [f32; SLOT_LANES],
+) {
+    for j in 0..SLOT_LANES {
+        u[j] = unit_from_hash(mix64(prefix[j] ^ u64::from(first[j] + add)));
+        v[j] = unit_from_hash(mix64(prefix[j] ^ u64::from(first[j] + add + 1)));
+    }
+}
+
+/// `PointSampler::get1` of dimension `first + add` in each lane; lanes whose prefix and
+/// first dimension are 0 get some number, unused.
+#[multiversion(targets("x86_64+avx2+fma", "x86_64+sse4.2"))]
+fn units(
+    prefix: &[u64; SLOT_LANES],
+    first: &[u32; SLOT_LANES],
+    add: u32,
+    out: &mut [f32; SLOT_LANES],
+) {
+    for ((o, &p), &f) in out.iter_mut().zip(prefix).zip(first) {
+        *o = unit_from_hash(mix64(p ^ u64::from(f + add)));
     }
 }
 

@@ -2,6 +2,7 @@
 //! image position of a world point. The render, the debug view and its overlay all use it.
 
 use glam::Vec3;
+use multiversion::multiversion;
 
 use crate::accel::Ray;
 use crate::scene::Camera;
@@ -54,6 +55,12 @@ impl CameraBasis {
         }
     }
 
+    /// [`Self::ray`]'s direction at `(x[j], y[j])` in each lane `j`, bit for bit (the
+    /// same operations in the same order; the origin is `self.origin`).
+    pub fn dirs_lanes(&self, x: &[f32; LANES], y: &[f32; LANES], dir: &mut [[f32; LANES]; 3]) {
+        dirs_lanes(self, x, y, dir);
+    }
+
     /// Depth of `p` along the view direction.
     pub fn depth(&self, p: Vec3) -> f32 {
         (p - self.origin).dot(self.forward)
@@ -85,4 +92,23 @@ impl CameraBasis {
 /// The camera's ray through image-plane position `(x, y)` in pixels (row 0 at the top).
 pub fn camera_ray(camera: &Camera, x: f32, y: f32) -> Ray {
     CameraBasis::new(camera).ray(x, y)
+}
+
+/// Lanes of [`CameraBasis::dirs_lanes`].
+const LANES: usize = crate::sampling::SLOT_LANES;
+
+/// [`CameraBasis::dirs_lanes`], in an AVX2 clone.
+#[multiversion(targets("x86_64+avx2+fma", "x86_64+sse4.2"))]
+fn dirs_lanes(b: &CameraBasis, x: &[f32; LANES], y: &[f32; LANES], dir: &mut [[f32; LANES]; 3]) {
+    let (f, r, u) = (b.forward.to_array(), b.right.to_array(), b.up.to_array());
+    for j in 0..LANES {
+        let sx = (2.0 * x[j] / b.width - 1.0) * b.tan_half * b.aspect;
+        let sy = (1.0 - 2.0 * y[j] / b.height) * b.tan_half;
+        let d: [f32; 3] = std::array::from_fn(|a| f[a] + sx * r[a] + sy * u[a]);
+        // glam's `normalize`: times `1 / length`, the dot product left to right.
+        let rcp = 1.0 / ((d[0] * d[0]) + (d[1] * d[1]) + (d[2] * d[2])).sqrt();
+        for a in 0..3 {
+            dir[a][j] = d[a] * rcp;
+        }
+    }
 }

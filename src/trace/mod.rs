@@ -3,12 +3,14 @@
 //! optional trace log.
 
 pub mod camera;
+mod camera_samples;
 mod crossings;
 pub mod geometry;
 pub mod lights;
 pub mod log;
 pub mod materials;
 pub mod plan;
+mod shade_lanes;
 pub mod shadow;
 pub mod surface;
 pub mod wavefront;

@@ -7,19 +7,20 @@
 //! ray of weight `w * (1 - alpha)`.
 
 use bevy_ecs::prelude::*;
-use glam::{Vec2, Vec3};
+use glam::Vec3;
 use rayon::prelude::*;
 
-use super::camera::CameraBasis;
+pub use super::camera_samples::{CameraSampleOffsets, generate_camera_samples};
 use super::lights::{LightSample, Lights};
 use super::log::{HitObserver, LightObserver, RayTrace, TraceLog};
 use super::materials::Materials;
 use super::plan::RenderPlan;
+use super::shade_lanes::shade_chunks_in_lanes;
 pub use super::shadow::{CHUNK, ShadowQueue, ShadowRay};
 use super::surface::{SHADOW_EPSILON, Surface, offset_ray_origin_towards, surface_at};
 use crate::accel::Ray;
-use crate::sampling::{Sampler, pixel_mode, pixel_sample_offset, samples_taken};
-use crate::scene::{Camera, PixelSampling, Settings};
+use crate::sampling::Sampler;
+use crate::scene::{Settings, ShadingModel};
 use crate::shade::{Model, Shading, ShadingInput, WithModel};
 use crate::stats::{RenderStats, Stage};
 use crate::trace::geometry::SceneGeometry;
@@ -135,81 +136,6 @@ pub struct SampleRadiance {
     pub values: Vec<Vec3>,
 }
 
-/// Where in its pixel each camera sample goes: the pixel centre unless the plan asks for
-/// sample patterns. The render and the debug recorder both ask it, so they agree.
-#[derive(Clone, Copy, Debug)]
-pub struct CameraSampleOffsets {
-    sampler: Sampler,
-    samples: u32,
-    mode: PixelSampling,
-    patterns: bool,
-}
-
-impl CameraSampleOffsets {
-    /// The offsets the settings and the plan call for.
-    pub fn new(settings: &Settings, plan: &RenderPlan) -> Self {
-        let mode = pixel_mode(settings);
-        Self {
-            sampler: Sampler::with_kind(settings.seed, settings.sampler),
-            samples: samples_taken(settings.pixel_samples, mode),
-            mode,
-            patterns: plan.pixel_patterns,
-        }
-    }
-
-    /// Offset within `pixel` of its camera sample `sample`, in [0, 1)^2.
-    pub fn of(&self, pixel: u32, sample: u32) -> Vec2 {
-        if self.patterns {
-            pixel_sample_offset(&self.sampler, pixel, sample, self.samples, self.mode)
-        } else {
-            Vec2::splat(0.5)
-        }
-    }
-}
-
-/// Generates one camera ray per pixel of the region, at its sample offset.
-pub fn generate_camera_samples(
-    settings: Res<Settings>,
-    plan: Res<RenderPlan>,
-    cameras: Query<&Camera>,
-    region: Res<PassRegion>,
-    mut wf: ResMut<Wavefront>,
-    mut radiance: ResMut<SampleRadiance>,
-    mut stats: ResMut<RenderStats>,
-) {
-    let Some(camera) = cameras.iter().next() else {
-        return;
-    };
-    let width = camera.width;
-    let basis = CameraBasis::new(camera);
-    let offsets = CameraSampleOffsets::new(&settings, &plan);
-    let wf = &mut *wf;
-    // Into the buffers of the last pass: their allocations are reused, not made anew.
-    (0..region.pixels)
-        .into_par_iter()
-        .with_min_len(CHUNK)
-        .map(|slot| {
-            let pixel = region.first_pixel + slot;
-            let offset = offsets.of(pixel, region.sample);
-            let (x, y) = ((pixel % width) as f32, (pixel / width) as f32);
-            QueuedRay {
-                ray: basis.ray(x + offset.x, y + offset.y),
-                weight: Vec3::ONE,
-                slot,
-                path: 0,
-            }
-        })
-        .collect_into_vec(&mut wf.rays);
-    let n = wf.rays.len();
-    stats.record(Stage::GenerateCameraSamples, n as u64);
-    stats.rays.camera += n as u64;
-    wf.depth = 0;
-    wf.next.clear();
-    radiance.first_pixel = region.first_pixel;
-    radiance.values.clear();
-    radiance.values.resize(n, Vec3::ZERO);
-}
-
 /// Each ray's closest hit and shading point into `surfaces`, in queue order; returns what
 /// `O` observed of each query (nothing for `()`).
 fn closest_hits<O: HitObserver>(
@@ -300,23 +226,23 @@ pub fn blend_alpha(settings: &Settings, alpha: f32, depth: u32) -> f32 {
 }
 
 /// What shading one hit needs besides the ray and its hit.
-struct ShadeContext<'a> {
-    settings: &'a Settings,
-    shading: Shading<'a>,
-    sampler: Sampler,
-    lights: &'a Lights,
-    materials: &'a Materials,
-    region: &'a PassRegion,
-    depth: u32,
-    queue_shadows: bool,
+pub(super) struct ShadeContext<'a> {
+    pub(super) settings: &'a Settings,
+    pub(super) shading: Shading<'a>,
+    pub(super) sampler: Sampler,
+    pub(super) lights: &'a Lights,
+    pub(super) materials: &'a Materials,
+    pub(super) region: &'a PassRegion,
+    pub(super) depth: u32,
+    pub(super) queue_shadows: bool,
 }
 
 /// Where one shading point's shadow rays start: [`Surface::shadow_ray_to`]'s origin, the
 /// same for every light sample, so it is offset once per point, not once per sample.
-struct ShadowOrigin(Vec3);
+pub(super) struct ShadowOrigin(Vec3);
 
 impl ShadowOrigin {
-    fn of(surface: &Surface) -> Self {
+    pub(super) fn of(surface: &Surface) -> Self {
         // `offset_ray_origin(.., ng, w = ng)` without its test of the side (always `ng`).
         Self(offset_ray_origin_towards(
             surface.p,
@@ -327,7 +253,7 @@ impl ShadowOrigin {
     }
 
     /// `surface.shadow_ray_to(target)`, bit for bit.
-    fn ray_to(&self, target: Vec3) -> Ray {
+    pub(super) fn ray_to(&self, target: Vec3) -> Ray {
         Ray {
             origin: self.0,
             dir: target - self.0,
@@ -401,7 +327,7 @@ fn shade_ray<M: Model>(
 /// `shadow_rays`, both in queue order; returns what `O` observed. Both are the last
 /// depth's buffers, refilled so that their allocations are reused. Chunks, not rays, own
 /// the shadow-ray vectors: no allocation per ray, and a deterministic queue.
-fn shade_chunks<O: LightObserver, M: Model>(
+pub(super) fn shade_chunks<O: LightObserver, M: Model>(
     cx: &ShadeContext,
     model: M,
     rays: &[QueuedRay],
@@ -496,8 +422,11 @@ pub fn shade_hits(
     let (rays, hits) = (&wf.rays, &wf.hits);
     let (radiance, shadows) = (&mut wf.ray_radiance, &mut wf.shadow_rays);
     match log {
-        // The render's loop has a copy for Lambertian without per-sample branches on the
-        // settings (see `Shading::dispatch`).
+        // Lambertian, the render benchmark's model: hits in lanes.
+        None if cx.shading.enabled && cx.shading.model == ShadingModel::Lambertian => {
+            shade_chunks_in_lanes(&cx, rays, hits, radiance, shadows);
+        }
+        // The other models' loop reads the model per sample (see `Shading::dispatch`).
         None => cx.shading.dispatch(ShadeRun {
             cx: &cx,
             rays,
@@ -642,6 +571,7 @@ pub fn rays_pending(wf: &Wavefront) -> bool {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use glam::Vec2;
 
     #[test]
     fn shadow_origin_gives_the_surfaces_shadow_rays() {

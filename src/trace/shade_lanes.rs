@@ -1,0 +1,595 @@
+//! The render's Lambertian shading with hits in lanes: [`LANES`] hits at a time, their
+//! positions, normals and weights side by side (SoA), each light sample made for all of
+//! them at once, per light kind, and `l = normalize(sample - p)` and the model done as
+//! `[f32; LANES]` loops (which the AVX2 clone turns into ymm code). The scalar loop in
+//! `wavefront.rs` handled every light and sampler kind per sample, one hit at a time.
+//!
+//! Same values bit for bit: every lane does the scalar code's f32 operations in the
+//! same order (Rust never contracts them into FMAs), and the shadow rays are written in
+//! the same order (hit by hit, then light by light, then sample by sample).
+
+// Lane loops index several arrays by the same lane, the form the vectoriser wants.
+#![allow(clippy::needless_range_loop)]
+
+use glam::Vec3;
+use multiversion::multiversion;
+
+use rayon::prelude::*;
+
+use super::shadow::{CHUNK, ShadowQueue, ShadowRay};
+use super::surface::{MIN_OFFSET_COORDINATE, Surface};
+use super::wavefront::{QueuedRay, ShadeContext, blend_alpha};
+use crate::accel::Ray;
+use crate::sampling::{PointSampler, SLOT_LANES, SlotLanes};
+
+/// Hits shaded together.
+pub const LANES: usize = SLOT_LANES;
+
+/// One f32 per lane.
+type Lanes = [f32; LANES];
+
+/// Three coordinates, each over the lanes.
+type Lanes3 = [Lanes; 3];
+
+/// What the model reads of the group's hits, in lanes (lanes without a hit hold what
+/// an earlier group left there, or zeros, and are never read back).
+#[derive(Clone, Copy, Debug, Default)]
+struct HitLanes {
+    p: Lanes3,
+    p_error: Lanes3,
+    ng: Lanes3,
+    n: Lanes3,
+    kd: Lanes3,
+    w: Lanes3,
+}
+
+/// One light sample over the lanes: where it is, what it adds (`c`), and whether it
+/// adds anything (`keep`: the direction to it could be normalized, else the scalar loop
+/// skips the sample, and `c` is not all zeros).
+#[derive(Clone, Copy, Debug, Default)]
+struct SampleLanes {
+    position: Lanes3,
+    c: Lanes3,
+    // As u32 (0 or 1), not bool: the lanes store it as one vector, bools one by one.
+    keep: [u32; LANES],
+}
+
+/// What a chunk's groups reuse, neither zeroed nor allocated per group.
+#[derive(Debug, Default)]
+struct Scratch {
+    lanes: HitLanes,
+    samples: Vec<SampleLanes>,
+}
+
+/// `x` clamped to [0, 1], NaN to 0: `sampling::light`'s `unit`, the same comparisons.
+#[inline(always)]
+fn unit(x: f32) -> f32 {
+    if x > 0.0 {
+        if x < 1.0 { x } else { 1.0 }
+    } else {
+        0.0
+    }
+}
+
+/// The Lambertian contribution of light sample (`position`, `color`) at each lane's hit:
+/// `ShadingInput`'s `lambertian(..) * w` after `try_normalize`, operation for operation.
+#[multiversion(targets("x86_64+avx2+fma", "x86_64+sse4.2"))]
+fn shade_sample(hits: &HitLanes, position: &Lanes3, color: &Lanes3, out: &mut SampleLanes) {
+    out.position = *position;
+    for j in 0..LANES {
+        let lx = position[0][j] - hits.p[0][j];
+        let ly = position[1][j] - hits.p[1][j];
+        let lz = position[2][j] - hits.p[2][j];
+        // glam: `dot` left to right, `length_recip` = 1 / sqrt, then a multiply.
+        let rcp = 1.0 / ((lx * lx) + (ly * ly) + (lz * lz)).sqrt();
+        // `is_finite() && > 0` as two comparisons (NaN fails both).
+        let ok = rcp > 0.0 && rcp < f32::INFINITY;
+        let (lx, ly, lz) = (lx * rcp, ly * rcp, lz * rcp);
+        let cos = (hits.n[0][j] * lx) + (hits.n[1][j] * ly) + (hits.n[2][j] * lz);
+        // `lit` is `cos > 0`; there `cos.max(0.0)` is `cos` itself.
+        let lit = cos > 0.0;
+        for a in 0..3 {
+            let d = color[a][j] * hits.kd[a][j] * cos;
+            let d = if lit && d.is_finite() { d } else { 0.0 };
+            out.c[a][j] = d * hits.w[a][j];
+        }
+        out.keep[j] =
+            u32::from(ok && (out.c[0][j] != 0.0 || out.c[1][j] != 0.0 || out.c[2][j] != 0.0));
+    }
+}
+
+/// Each lane's shadow-ray origin, `ShadowOrigin::of` bit for bit: `p` pushed out of its
+/// error box along `ng` (`offset_ray_origin_towards(p, p_error, ng, ng)`), then rounded
+/// one float away from the surface, with `f32::next_up` / `next_down` and the
+/// subnormal guard written as selects so that the lanes need no branch.
+#[multiversion(targets("x86_64+avx2+fma", "x86_64+sse4.2"))]
+fn shadow_origins(p: &Lanes3, p_error: &Lanes3, ng: &Lanes3, out: &mut Lanes3) {
+    for j in 0..LANES {
+        let offset = (ng[0][j].abs() * p_error[0][j])
+            + (ng[1][j].abs() * p_error[1][j])
+            + (ng[2][j].abs() * p_error[2][j]);
+        for a in 0..3 {
+            let (x, side) = (p[a][j] + offset * ng[a][j], ng[a][j]);
+            out[a][j] = away_from_surface(x, side);
+        }
+    }
+}
+
+/// One coordinate of `offset_ray_origin_towards`'s rounding: `x` moved one float
+/// towards `side`'s sign, or to the least offset coordinate if it is below that.
+#[inline(always)]
+fn away_from_surface(x: f32, side: f32) -> f32 {
+    let least = side != 0.0 && x.abs() < MIN_OFFSET_COORDINATE;
+    let (up, down) = (side > 0.0, side < 0.0);
+    // Past `least`, x is NaN or not 0: `next_up` adds one to the bits of a positive x
+    // and takes one from a negative one, `next_down` the other way round; each keeps
+    // NaN and the infinity it moves towards.
+    let grow = (x > 0.0) == up;
+    let keep = x.is_nan() || (grow && x.is_infinite());
+    let bits = x.to_bits();
+    let stepped = f32::from_bits(if grow {
+        bits.wrapping_add(1)
+    } else {
+        bits.wrapping_sub(1)
+    });
+    if least {
+        MIN_OFFSET_COORDINATE.copysign(side)
+    } else if (up || down) && !keep {
+        stepped
+    } else {
+        x
+    }
+}
+
+/// Point `(u, v)` of parallelogram light `q` in each lane, as `sample_parallelogram_light`
+/// with the colour times `inv`.
+#[multiversion(targets("x86_64+avx2+fma", "x86_64+sse4.2"))]
+fn parallelogram_lanes(
+    q: &crate::scene::ParallelogramLight,
+    u: &Lanes,
+    v: &Lanes,
+    inv: f32,
+    position: &mut Lanes3,
+    color: &mut Lanes3,
+) {
+    let (v0, e1, e2) = (q.v0.to_array(), q.edge01.to_array(), q.edge02.to_array());
+    let cs = [
+        q.color0.to_array(),
+        q.color1.to_array(),
+        q.color2.to_array(),
+        q.color3.to_array(),
+    ];
+    for j in 0..LANES {
+        let (u, v) = (unit(u[j]), unit(v[j]));
+        let (a, b, c, d) = ((1.0 - u) * (1.0 - v), u * (1.0 - v), (1.0 - u) * v, u * v);
+        for k in 0..3 {
+            position[k][j] = v0[k] + u * e1[k] + v * e2[k];
+            color[k][j] = (a * cs[0][k] + b * cs[1][k] + c * cs[2][k] + d * cs[3][k]) * inv;
+        }
+    }
+}
+
+/// Point `s` of segment light `l` in each lane, as `sample_segment_light` with the
+/// colour times `inv`.
+fn segment_lanes(
+    l: &crate::scene::SegmentLight,
+    s: &Lanes,
+    inv: f32,
+    position: &mut Lanes3,
+    color: &mut Lanes3,
+) {
+    let (e0, e1) = (l.endpoint0.to_array(), l.endpoint1.to_array());
+    let (c0, c1) = (l.color0.to_array(), l.color1.to_array());
+    for j in 0..LANES {
+        let s = unit(s[j]);
+        for k in 0..3 {
+            position[k][j] = e0[k] * (1.0 - s) + e1[k] * s;
+            color[k][j] = (c0[k] * (1.0 - s) + c1[k] * s) * inv;
+        }
+    }
+}
+
+/// Shades the group of up to [`LANES`] rays starting at queue index `first`: each ray's
+/// direct light into `out`, its shadow rays appended to `shadows`, exactly as
+/// `shade_ray` with `LambertianModel` and nothing observed.
+fn shade_group(
+    cx: &ShadeContext,
+    first: usize,
+    rays: &[QueuedRay],
+    hits: &[Option<Surface>],
+    out: &mut [Vec3],
+    shadows: &mut Vec<ShadowRay>,
+    scratch: &mut Scratch,
+) {
+    let Scratch { lanes, samples } = scratch;
+    let s = cx.settings;
+    let pixels = std::array::from_fn(|j| {
+        rays.get(j)
+            .map_or(0, |q| cx.region.first_pixel.wrapping_add(q.slot))
+    });
+    let at = cx.sampler.at_lanes(&pixels, cx.region.sample);
+    let mut points: [Option<PointSampler>; LANES] = [None; LANES];
+    for (j, (q, hit)) in rays.iter().zip(hits).enumerate() {
+        let Some(surface) = hit else { continue };
+        let m = &cx.materials.list[surface.material as usize];
+        let w = q.weight * blend_alpha(s, m.alpha, cx.depth);
+        let kd = cx.materials.kd_at(surface.material, surface.uv);
+        for a in 0..3 {
+            lanes.p[a][j] = surface.p[a];
+            lanes.p_error[a][j] = surface.p_error[a];
+            lanes.ng[a][j] = surface.ng[a];
+            lanes.n[a][j] = surface.n[a];
+            lanes.kd[a][j] = kd[a];
+            lanes.w[a][j] = w[a];
+        }
+        points[j] = Some(at[j]);
+    }
+    let lights = cx.lights;
+    let n = s.shadow_samples.max(1);
+    let inv = 1.0 / n as f32;
+    let path = |j: usize| rays.get(j).map_or(0, |q| q.path);
+    // Each lane's sample numbers of one area light (zeros in lanes without a hit).
+    let slots = |light: usize| {
+        SlotLanes::new(std::array::from_fn(|j| {
+            points[j].map(|p| p.slot((cx.depth, path(j), light as u32), n))
+        }))
+    };
+    // The group's samples, light by light, into `samples` (its entries are overwritten:
+    // it keeps its length from group to group, so nothing is zeroed or copied twice).
+    let mut count = 0;
+    let mut shade = |position: &Lanes3, color: &Lanes3| {
+        if samples.len() == count {
+            samples.push(SampleLanes::default());
+        }
+        shade_sample(lanes, position, color, &mut samples[count]);
+        count += 1;
+    };
+    let mut position = Lanes3::default();
+    let mut color = Lanes3::default();
+    let (mut u, mut v) = (Lanes::default(), Lanes::default());
+    for p in &lights.points {
+        let (pp, pc) = (p.position.to_array(), p.color.to_array());
+        let position = pp.map(|x| [x; LANES]);
+        let color = pc.map(|x| [x; LANES]);
+        shade(&position, &color);
+    }
+    let base = lights.points.len();
+    for (i, l) in lights.segments.iter().enumerate() {
+        let slots = slots(base + i);
+        for k in 0..n {
+            slots.light1(k, &mut u);
+            segment_lanes(l, &u, inv, &mut position, &mut color);
+            shade(&position, &color);
+        }
+    }
+    let base = base + lights.segments.len();
+    for (i, q) in lights.parallelograms.iter().enumerate() {
+        let slots = slots(base + i);
+        for k in 0..n {
+            slots.light2(k, &mut u, &mut v);
+            parallelogram_lanes(q, &u, &v, inv, &mut position, &mut color);
+            shade(&position, &color);
+        }
+    }
+    let samples = &samples[..count];
+    let mut origins = Lanes3::default();
+    if cx.queue_shadows {
+        shadow_origins(&lanes.p, &lanes.p_error, &lanes.ng, &mut origins);
+    }
+    // Back to ray order: each hit's samples in light order, as the scalar loop.
+    for (j, ((q, hit), r)) in rays.iter().zip(hits).zip(out).enumerate() {
+        if hit.is_none() {
+            *r = q.weight * s.background;
+            continue;
+        };
+        let mut direct = Vec3::ZERO;
+        let origin = Vec3::new(origins[0][j], origins[1][j], origins[2][j]);
+        for sample in samples {
+            if sample.keep[j] == 0 {
+                continue;
+            }
+            let c = Vec3::new(sample.c[0][j], sample.c[1][j], sample.c[2][j]);
+            if cx.queue_shadows {
+                let target = Vec3::new(
+                    sample.position[0][j],
+                    sample.position[1][j],
+                    sample.position[2][j],
+                );
+                shadows.push(ShadowRay {
+                    ray: Ray {
+                        origin,
+                        dir: target - origin,
+                    },
+                    contribution: c,
+                    owner: (first + j) as u32,
+                });
+            } else {
+                direct += c;
+            }
+        }
+        *r = direct;
+    }
+}
+
+/// `shade_chunks` of a render with the Lambertian model: chunk by chunk in parallel,
+/// [`LANES`] rays at a time within a chunk, into `radiance` and `shadow_rays` (the last
+/// depth's buffers, refilled).
+pub(super) fn shade_chunks_in_lanes(
+    cx: &ShadeContext,
+    rays: &[QueuedRay],
+    hits: &[Option<Surface>],
+    radiance: &mut Vec<Vec3>,
+    shadow_rays: &mut ShadowQueue,
+) {
+    radiance.resize(rays.len(), Vec3::ZERO);
+    let chunk_shadows = shadow_rays.start(rays.len().div_ceil(CHUNK));
+    rays.par_chunks(CHUNK)
+        .zip(hits.par_chunks(CHUNK))
+        .zip(radiance.par_chunks_mut(CHUNK))
+        .zip(chunk_shadows.par_iter_mut())
+        .enumerate()
+        .for_each(|(c, (((rays, hits), out), shadows))| {
+            let mut scratch = Scratch::default();
+            let groups = rays
+                .chunks(LANES)
+                .zip(hits.chunks(LANES))
+                .zip(out.chunks_mut(LANES));
+            for (g, ((rays, hits), out)) in groups.enumerate() {
+                let first = c * CHUNK + g * LANES;
+                shade_group(cx, first, rays, hits, out, shadows, &mut scratch);
+            }
+        });
+}
+
+#[cfg(test)]
+mod tests {
+    use glam::Vec2;
+
+    use super::*;
+    use crate::sampling::Sampler;
+    use crate::scene::{ParallelogramLight, PointLight, SamplerKind, SegmentLight, Settings};
+    use crate::shade::Shading;
+    use crate::shade::models::LambertianModel;
+    use crate::trace::lights::Lights;
+    use crate::trace::materials::{MaterialData, Materials};
+    use crate::trace::wavefront::{PassRegion, ShadowOrigin, shade_chunks};
+
+    /// A small deterministic generator (xorshift), numbers in [-1, 1).
+    struct Numbers(u64);
+
+    impl Numbers {
+        fn next(&mut self) -> f32 {
+            self.0 ^= self.0 << 13;
+            self.0 ^= self.0 >> 7;
+            self.0 ^= self.0 << 17;
+            (self.0 >> 40) as f32 / (1u64 << 23) as f32 - 1.0
+        }
+        fn vec3(&mut self, scale: f32) -> Vec3 {
+            Vec3::new(self.next(), self.next(), self.next()) * scale
+        }
+    }
+
+    /// `count` rays with hits (about one in five missing) in a box around the lights,
+    /// some facing away from them, one sitting on the point light and one with a huge
+    /// `kd` (non-finite contributions) or an infinite weight.
+    fn scene(count: usize, seed: u64) -> (Vec<QueuedRay>, Vec<Option<Surface>>) {
+        let mut r = Numbers(seed);
+        let rays = (0..count)
+            .map(|i| QueuedRay {
+                ray: Ray {
+                    origin: r.vec3(3.0),
+                    dir: r.vec3(1.0),
+                },
+                weight: if i % 97 == 13 {
+                    Vec3::new(f32::INFINITY, 0.5, 1.0)
+                } else {
+                    r.vec3(1.0).abs()
+                },
+                slot: (i * 7 % 1000) as u32,
+                path: (i % 3) as u32,
+            })
+            .collect();
+        let hits = (0..count)
+            .map(|i| {
+                (r.next() > -0.6).then(|| Surface {
+                    p: if i % 50 == 7 {
+                        Vec3::new(0.5, 1.5, -0.25)
+                    } else {
+                        r.vec3(2.0)
+                    },
+                    p_error: r.vec3(1e-6).abs(),
+                    ng: r.vec3(1.0).normalize(),
+                    n: r.vec3(1.0).normalize(),
+                    uv: Vec2::ZERO,
+                    material: (i % 3) as u32,
+                })
+            })
+            .collect();
+        (rays, hits)
+    }
+
+    fn lights(points: usize, segments: usize, parallelograms: usize) -> Lights {
+        Lights {
+            points: (0..points)
+                .map(|i| PointLight {
+                    // The first one sits on a hit point (its direction cannot be normalized).
+                    position: Vec3::new(0.5, 1.5, -0.25) + i as f32 * Vec3::X,
+                    color: Vec3::new(1.0, 0.5, 0.25),
+                })
+                .collect(),
+            segments: (0..segments)
+                .map(|i| SegmentLight {
+                    endpoint0: Vec3::new(-1.0, 2.0, i as f32),
+                    endpoint1: Vec3::new(1.0, 2.5, -1.0),
+                    color0: Vec3::new(0.0, 1.0, 2.0),
+                    color1: Vec3::new(3.0, 0.5, 0.0),
+                })
+                .collect(),
+            parallelograms: (0..parallelograms)
+                .map(|i| ParallelogramLight {
+                    v0: Vec3::new(-0.2, 1.99 - i as f32, -0.2),
+                    edge01: Vec3::new(0.4, 0.0, 0.1),
+                    edge02: Vec3::new(0.0, 0.2, 0.4),
+                    color0: Vec3::new(1.0, 0.0, 0.0),
+                    color1: Vec3::new(0.0, 1.0, 0.0),
+                    color2: Vec3::new(0.0, 0.0, 1.0),
+                    color3: Vec3::new(0.0, 1.0, 1.0),
+                })
+                .collect(),
+        }
+    }
+
+    fn materials() -> Materials {
+        let material = |kd: Vec3| MaterialData {
+            kd,
+            ks: Vec3::ZERO,
+            shininess: 1.0,
+            alpha: 1.0,
+            texture: None,
+            wrap: Default::default(),
+        };
+        Materials {
+            list: vec![
+                material(Vec3::new(0.75, 0.1, 0.1)),
+                material(Vec3::splat(0.5)),
+                material(Vec3::new(3e38, 0.2, 0.0)),
+            ],
+            ..Default::default()
+        }
+    }
+
+    /// Radiance and shadow rays as bits (NaN compares equal to itself).
+    fn bits(radiance: &[Vec3], shadows: &ShadowQueue) -> (Vec<[u32; 3]>, Vec<[u32; 10]>) {
+        let v = |v: Vec3| v.to_array().map(f32::to_bits);
+        let shadows = shadows
+            .iter()
+            .map(|s| {
+                let [a, b, c] = v(s.ray.origin);
+                let [d, e, f] = v(s.ray.dir);
+                let [g, h, i] = v(s.contribution);
+                [a, b, c, d, e, f, g, h, i, s.owner]
+            })
+            .collect();
+        (radiance.iter().map(|&r| v(r)).collect(), shadows)
+    }
+
+    #[test]
+    fn shadow_origins_in_lanes_are_the_scalar_ones() {
+        // Coordinates and normals around every case of the rounding: zero, below and at
+        // the least offset coordinate, ordinary, the largest float, infinities, NaN.
+        let m = MIN_OFFSET_COORDINATE;
+        let values = [
+            0.0,
+            -0.0,
+            1e-40,
+            -1e-40,
+            m,
+            -m,
+            m.next_down(),
+            -m.next_down(),
+            m.next_up(),
+            0.3,
+            -2.5,
+            1e6,
+            f32::MAX,
+            f32::MIN,
+            f32::INFINITY,
+            f32::NEG_INFINITY,
+            f32::NAN,
+            -f32::NAN,
+        ];
+        let mut surfaces = Vec::new();
+        for &x in &values {
+            for &side in &values {
+                for e in [0.0, 1e-7, f32::INFINITY] {
+                    surfaces.push(Surface {
+                        p: Vec3::new(x, -x, 0.5),
+                        p_error: Vec3::new(e, 0.0, 1e-8),
+                        ng: Vec3::new(side, 0.6, -side),
+                        n: Vec3::Y,
+                        uv: Vec2::ZERO,
+                        material: 0,
+                    });
+                }
+            }
+        }
+        for group in surfaces.chunks(LANES) {
+            let mut lanes = HitLanes::default();
+            for (j, s) in group.iter().enumerate() {
+                for a in 0..3 {
+                    lanes.p[a][j] = s.p[a];
+                    lanes.p_error[a][j] = s.p_error[a];
+                    lanes.ng[a][j] = s.ng[a];
+                }
+            }
+            let mut origins = Lanes3::default();
+            shadow_origins(&lanes.p, &lanes.p_error, &lanes.ng, &mut origins);
+            for (j, s) in group.iter().enumerate() {
+                let lane = [0, 1, 2].map(|a| origins[a][j].to_bits());
+                let scalar = ShadowOrigin::of(s).ray_to(Vec3::ZERO).origin;
+                assert_eq!(lane, scalar.to_array().map(f32::to_bits), "{s:?}");
+            }
+        }
+    }
+
+    #[test]
+    fn lanes_give_the_scalar_loops_radiance_and_shadow_rays() {
+        let materials = materials();
+        let mut compared = 0;
+        for (count, seed) in [(1, 1), (7, 2), (8, 3), (13, 4), (2 * CHUNK + 21, 5)] {
+            let (rays, hits) = scene(count, seed);
+            for (points, segments, parallelograms) in
+                [(1, 0, 0), (0, 1, 0), (0, 0, 1), (2, 1, 2), (0, 0, 0)]
+            {
+                let lights = lights(points, segments, parallelograms);
+                for kind in [
+                    SamplerKind::Independent,
+                    SamplerKind::Stratified,
+                    SamplerKind::Sobol,
+                ] {
+                    for (shadow_samples, queue_shadows, depth) in
+                        [(4, true, 0), (1, true, 1), (0, false, 0), (3, false, 2)]
+                    {
+                        let settings = Settings {
+                            shadow_samples,
+                            background: Vec3::new(0.1, 0.2, 0.3),
+                            ..Settings::default()
+                        };
+                        let region = PassRegion {
+                            sample: 5,
+                            first_pixel: 40,
+                            pixels: count as u32,
+                        };
+                        let cx = ShadeContext {
+                            settings: &settings,
+                            shading: Shading {
+                                enabled: true,
+                                model: crate::scene::ShadingModel::Lambertian,
+                                gradient: &settings.gradient,
+                                comparison_gradient: &settings.comparison_gradient,
+                            },
+                            sampler: Sampler::with_kind(9, kind),
+                            lights: &lights,
+                            materials: &materials,
+                            region: &region,
+                            depth,
+                            queue_shadows,
+                        };
+                        let (mut r0, mut s0) = (Vec::new(), ShadowQueue::default());
+                        shade_chunks::<(), _>(&cx, LambertianModel, &rays, &hits, &mut r0, &mut s0);
+                        let (mut r1, mut s1) = (Vec::new(), ShadowQueue::default());
+                        shade_chunks_in_lanes(&cx, &rays, &hits, &mut r1, &mut s1);
+                        assert_eq!(
+                            bits(&r1, &s1),
+                            bits(&r0, &s0),
+                            "{count} rays, lights {points}/{segments}/{parallelograms}, \
+                             {kind:?}, {shadow_samples} samples, queue {queue_shadows}"
+                        );
+                        compared += s0.len();
+                    }
+                }
+            }
+        }
+        assert!(compared > 10_000, "{compared} shadow rays compared");
+    }
+}
