@@ -389,7 +389,7 @@ fn split(
     match sah {
         Some(plane) if n > MAX_LEAF || TRAVERSAL_COST + plane.cost / area < blocks(n as u32) => {
             let (mid, lc, rc) = partition(refs, bins, &plane);
-            // Binning and partition agree (`bins_of`, `goes_left`), so both sides are non-empty;
+            // Binning and partition agree (`bins_of`, `first_right`), so both sides are non-empty;
             // this guards against it anyway.
             if mid == 0 || mid == n {
                 return Some(median_split(refs, ext));

@@ -1,11 +1,11 @@
 //! The binned SAH's bins (after Wald 2007, see [`super`]): each node's primitives
 //! counted and boxed per axis in `BINS` bins of their centroids, the sweep that costs
-//! every plane between bins, and the in-place partition by the chosen plane. Binning
-//! and partition place a centroid by the same arithmetic, so they always agree.
+//! every plane between bins, and the in-place partition by the chosen plane. The
+//! partition compares centroids with the least one that bins right of the plane
+//! ([`first_right`]), which the binning's arithmetic decides, so they always agree.
 
 use multiversion::multiversion;
 use rayon::prelude::*;
-use wide::f32x4;
 
 use super::{BINS, Box4, Lanes, PARALLEL_BIN_CHUNK, PrimRef, TWO_SETS_MIN, blocks};
 
@@ -232,7 +232,7 @@ pub(super) struct Plane {
 
 /// Bin index of a centroid coordinate: `((c - min) * scale)` truncated into
 /// `0..BINS`, NaN → 0, as `as usize` then `min(BINS - 1)` would give; clamped as a
-/// float by compare-and-select. [`goes_left`] is the same test against a plane.
+/// float by compare-and-select. [`first_right`] gives the same sides of a plane.
 #[inline(always)]
 fn bin_position(c: f32, min: f32, scale: f32) -> f32 {
     let x = (c - min) * scale;
@@ -256,23 +256,6 @@ fn bins_of(c: Lanes, min: Lanes, scale: Lanes) -> [u32; 4] {
         let x = bin_position(c[i], min[i], scale[i]);
         (x.floor() + MAGIC).to_bits() - MAGIC.to_bits()
     })
-}
-
-/// [`bin_position`] of four lanes at once, kept in SIMD registers: `fast_max` /
-/// `fast_min` (`maxps` / `minps`) are exactly its two compare-and-selects.
-#[inline(always)]
-fn bin_positions(c: f32x4, min: f32x4, scale: f32x4) -> f32x4 {
-    ((c - min) * scale)
-        .fast_max(f32x4::ZERO)
-        .fast_min(f32x4::splat((BINS - 1) as f32))
-}
-
-/// Whether a centroid coordinate whose [`bin_position`] is `x` bins below `bin` (≥ 1):
-/// for `x` ≥ 0, `trunc(x) < bin` exactly when `x < bin`, so no truncation is needed;
-/// the clamps change nothing either side of `bin` (NaN goes to bin 0, left).
-#[inline(always)]
-fn goes_left(x: f32, bin: usize) -> bool {
-    x < bin as f32
 }
 
 /// Cheapest binned-SAH plane over the three axes, if any separates the centroids.
@@ -344,258 +327,92 @@ pub(super) fn best_sah_plane(bins: &Bins) -> Option<Plane> {
     })
 }
 
+/// The least centroid coordinate whose bin on an axis with `min` and `scale` (positive;
+/// the chosen axis's) is `bin` (1..BINS) or above: a centroid goes left of the plane
+/// after bin `bin - 1` exactly when `!(c >= first_right)`. The bin's test against a
+/// plane, [`bin_position`] below `bin`, is `!((c - min) * scale >= bin)` (the clamps
+/// change nothing either side of `bin`, and NaN goes to bin 0, left), whose operand
+/// grows with `c` (each rounding step does; +0 and -0 give equal results): so the
+/// partition compares each centroid once instead of computing its bin (four
+/// operations on the loop's branch). Found from the estimate `min + bin / scale` by a
+/// few steps of one ulp, else by bisection over the floats in order.
+fn first_right(min: f32, scale: f32, bin: usize) -> f32 {
+    let right = |c: f32| (c - min) * scale >= bin as f32;
+    let mut c = min + bin as f32 / scale;
+    for _ in 0..8 {
+        if c.is_nan() {
+            break;
+        }
+        if right(c) {
+            let below = c.next_down();
+            if !right(below) {
+                return c;
+            }
+            c = below;
+        } else {
+            c = c.next_up();
+        }
+    }
+    // Floats other than NaN in order as unsigned integers; -inf is left (min is finite:
+    // an infinite centroid makes the extent infinite or NaN and the scale zero) and
+    // +inf right.
+    let key = |f: f32| {
+        let b = f.to_bits();
+        if b >> 31 == 1 { !b } else { b | 1 << 31 }
+    };
+    let float = |k: u32| f32::from_bits(if k >> 31 == 1 { k & !(1 << 31) } else { !k });
+    let (mut left, mut first) = (key(f32::NEG_INFINITY), key(f32::INFINITY));
+    while first - left > 1 {
+        let mid = left + (first - left) / 2;
+        if right(float(mid)) {
+            first = mid;
+        } else {
+            left = mid;
+        }
+    }
+    float(first)
+}
+
 /// In-place partition by `plane`; returns how many primitives go left (now at
 /// the front) and the centroid boxes of both sides. The swap order is fixed:
 /// it decides the primitive order in the leaves.
 #[inline(always)]
 pub(super) fn partition(refs: &mut [PrimRef], bins: &Bins, plane: &Plane) -> (usize, Box4, Box4) {
+    let axis = plane.axis % 3;
+    let first = first_right(bins.min[axis], bins.scale[axis], plane.bin);
     // One loop per axis: a lane picked at run time went through memory.
-    match plane.axis {
-        0 => partition_on::<0>(refs, bins, plane.bin),
-        1 => partition_on::<1>(refs, bins, plane.bin),
-        _ => partition_on::<2>(refs, bins, plane.bin),
+    match axis {
+        0 => partition_on::<0>(refs, first),
+        1 => partition_on::<1>(refs, first),
+        _ => partition_on::<2>(refs, first),
     }
 }
 
-/// [`partition`] on axis `AXIS`.
+/// [`partition`] on axis `AXIS`: centroids below `first_right` go left.
 #[inline(always)]
-fn partition_on<const AXIS: usize>(
-    refs: &mut [PrimRef],
-    bins: &Bins,
-    bin: usize,
-) -> (usize, Box4, Box4) {
-    let (min, scale) = (f32x4::from(bins.min), f32x4::from(bins.scale));
+fn partition_on<const AXIS: usize>(refs: &mut [PrimRef], first_right: f32) -> (usize, Box4, Box4) {
     let mut left = Box4::EMPTY;
     let mut right = Box4::EMPTY;
     let mut i = 0;
     let mut j = refs.len();
     while i < j {
         let r = refs[i];
-        // All four lanes in SIMD registers: picking the axis's lane first made the
-        // compiler take the centroid apart and put it back together.
-        let c = r.centroid_x4();
-        let x = bin_positions(c, min, scale).to_array();
-        let c = c.to_array();
-        if goes_left(x[AXIS], bin) {
-            left.grow(c, c);
-            i += 1;
-        } else {
+        let c = r.centroid_x4().to_array();
+        // NaN goes left (the comparison is false).
+        if c[AXIS] >= first_right {
             right.grow(c, c);
             j -= 1;
             // refs.swap(i, j), without its round trip through the stack.
             refs[i] = refs[j];
             refs[j] = r;
+        } else {
+            left.grow(c, c);
+            i += 1;
         }
     }
     (i, left, right)
 }
 
 #[cfg(test)]
-mod tests {
-    use glam::Vec3;
-
-    use super::super::NodeBounds;
-    use super::*;
-    use crate::accel::Aabb;
-    use crate::test_util::Lcg;
-
-    /// The per-axis sweep [`best_sah_plane`] must agree with (the builder's before it
-    /// swept the axes together).
-    fn best_sah_plane_reference(bins: &Bins) -> Option<Plane> {
-        let mut best: Option<Plane> = None;
-        for axis in 0..3 {
-            if bins.scale[axis] == 0.0 {
-                continue;
-            }
-            let (counts, boxes) = (&bins.counts[axis], &bins.boxes[axis]);
-            // right_cost[k]: area * blocks of bins k.. (the right side of plane k).
-            let mut right_cost = [0.0f32; BINS];
-            let mut acc_box = Box4::EMPTY;
-            let mut acc_n = 0u32;
-            let mut right = f32::INFINITY; // empty right side: not a split
-            for k in (1..BINS).rev() {
-                // An empty bin changes neither the box nor the count: skip the area.
-                if counts[k] > 0 {
-                    acc_box = acc_box.union(boxes[k].box4());
-                    acc_n += counts[k];
-                    right = acc_box.surface_area() * blocks(acc_n);
-                }
-                right_cost[k] = right;
-            }
-            let mut left_box = Box4::EMPTY;
-            let mut left_n = 0u32;
-            for k in 1..BINS {
-                // Plane k costs the same as plane k - 1 when bin k - 1 is empty,
-                // and only a strictly cheaper plane replaces the best one.
-                if counts[k - 1] == 0 {
-                    continue;
-                }
-                left_box = left_box.union(boxes[k - 1].box4());
-                left_n += counts[k - 1];
-                let cost = left_box.surface_area() * blocks(left_n) + right_cost[k];
-                if cost.is_finite() && best.as_ref().is_none_or(|b| cost < b.cost) {
-                    let occupied = (0..BINS).fold(0, |m, k| m | u32::from(counts[k] > 0) << k);
-                    best = Some(Plane {
-                        axis,
-                        bin: k,
-                        occupied,
-                        cost,
-                    });
-                }
-            }
-        }
-        best
-    }
-
-    #[test]
-    fn sweep_matches_the_per_axis_reference() {
-        // Bins as nodes of a few to many primitives leave them: mostly empty to full,
-        // flat and inverted (empty) boxes, infinite coordinates, ties between bins
-        // and between axes (copied boxes), an axis with zero extent.
-        let mut rng = Lcg(0x9e37_79b9_7f4a_7c15);
-        let mut planes = 0;
-        for round in 0..20_000 {
-            let mut bins = Bins::empty(Box4::EMPTY);
-            let full = rng.below(17);
-            for axis in 0..3 {
-                bins.scale[axis] = if rng.below(13) == 0 { 0.0 } else { 1.0 };
-                for k in 0..BINS {
-                    if rng.below(16) >= full {
-                        continue;
-                    }
-                    bins.counts[axis][k] = rng.below(9) + 1;
-                    let v: [f32; 4] = std::array::from_fn(|_| rng.below(64) as f32 * 0.25 - 8.0);
-                    let (lo, hi): (Lanes, Lanes) = match rng.below(20) {
-                        0 => (Box4::EMPTY.min, Box4::EMPTY.max),
-                        1 => ([f32::NEG_INFINITY, 0.0, 0.0, 0.0], [1.0, 1.0, 1.0, 0.0]),
-                        2 => ([v[0], v[1], 0.0, 0.0], [v[0], 8.0, 0.0, 0.0]),
-                        _ => (
-                            [v[0], v[1], v[2], 0.0],
-                            [v[0] + v[3] + 8.0, v[1] + 4.0, v[2] + 2.0, 0.0],
-                        ),
-                    };
-                    bins.boxes[axis][k] = BinBox::of(Box4 { min: lo, max: hi });
-                }
-            }
-            if round % 7 == 0 {
-                bins.counts[1] = bins.counts[0];
-                bins.boxes[1] = bins.boxes[0];
-            }
-            let plane = best_sah_plane(&bins);
-            let key = |p: &Plane| (p.axis, p.bin, p.occupied, p.cost.to_bits());
-            let want = best_sah_plane_reference(&bins);
-            assert_eq!(
-                plane.as_ref().map(key),
-                want.as_ref().map(key),
-                "round {round}"
-            );
-            if let Some(plane) = plane {
-                // The boxes either side, from the occupied bins, are the unions of all.
-                let boxes = &bins.boxes[plane.axis];
-                let union = |s: &[BinBox]| s.iter().fold(BinBox::EMPTY, |a, b| a.union(*b)).0;
-                let bits = |b: Box4| BinBox::of(b).0.map(f32::to_bits);
-                let (left, right) = bins.boxes_around(&plane);
-                let want = (union(&boxes[..plane.bin]), union(&boxes[plane.bin..]));
-                assert_eq!(bits(left), want.0.map(f32::to_bits), "round {round}");
-                assert_eq!(bits(right), want.1.map(f32::to_bits), "round {round}");
-                planes += 1;
-            }
-        }
-        assert!(planes > 10_000, "{planes}");
-    }
-
-    #[test]
-    fn two_sets_of_bins_match_one_pass_bit_for_bit() {
-        // Coordinates of +0 and -0 (ties the order decides) among a few values,
-        // enough primitives for the two sets; odd and even counts.
-        let mut rng = Lcg(0x2545_f491_4f6c_dd1d);
-        for n in [TWO_SETS_MIN, 999, 4096] {
-            let values = [0.0f32, -0.0, 1.0, -1.0, 0.5];
-            let refs: Vec<PrimRef> = (0..n)
-                .map(|i| {
-                    let mut v = || values[rng.below(5) as usize];
-                    let lo = Vec3::new(v(), v(), v());
-                    let hi = lo + Vec3::new(v().abs(), v().abs(), v().abs());
-                    PrimRef::new(i, &Aabb::new(lo, hi))
-                })
-                .collect();
-            let centroids = NodeBounds::of(&refs).centroids;
-            let mut two = Bins::empty(centroids);
-            two.add(&refs);
-            let mut one = Bins::empty(centroids);
-            for r in &refs {
-                one.add_one(r);
-            }
-            // The fourth row counts the unused lane and is never merged or read.
-            assert_eq!(one.counts[..3], two.counts[..3], "{n}");
-            for axis in 0..3 {
-                for k in 0..BINS {
-                    let bits = |b: &Bins| b.boxes[axis][k].0.map(f32::to_bits);
-                    assert_eq!(bits(&one), bits(&two), "{n} prims, axis {axis} bin {k}");
-                }
-            }
-        }
-    }
-
-    /// Every float the binning can meet near the bin edges, and the awkward ones.
-    fn samples() -> Vec<f32> {
-        let mut xs = vec![
-            0.0, -0.0, -1.0, 1e-30, 0.5, 1.5, 2.5, 14.5, 15.0, 15.5, 16.0,
-        ];
-        xs.extend([1e9, f32::MAX, f32::INFINITY, f32::NEG_INFINITY, f32::NAN]);
-        for k in 0..=BINS as u32 {
-            let b = k as f32;
-            xs.extend([b, b.next_down(), b.next_up(), b + 0.25, b + 0.5, b + 0.75]);
-        }
-        for i in 0..10_000 {
-            xs.push(i as f32 * 0.0017);
-        }
-        xs
-    }
-
-    #[test]
-    fn bin_box_area_is_box4_area_bit_for_bit_or_both_nan() {
-        // Every pair of corner coordinates from awkward values, per axis: boxes empty
-        // on any one axis, flat, infinite, signed zeros, NaN.
-        let values = [
-            -1e30f32,
-            -2.5,
-            -0.0,
-            0.0,
-            1e-40,
-            0.75,
-            3.0,
-            f32::INFINITY,
-            f32::NEG_INFINITY,
-            f32::NAN,
-        ];
-        let mut rng = Lcg(0x5851_f42d_4c95_7f2d);
-        for _ in 0..50_000 {
-            let mut pick = || values[rng.below(values.len() as u32) as usize];
-            let min: Lanes = [pick(), pick(), pick(), 0.0];
-            let max: Lanes = [pick(), pick(), pick(), 0.0];
-            let b = Box4 { min, max };
-            let (got, want) = (BinBox::of(b).surface_area(), b.surface_area());
-            let same = got.to_bits() == want.to_bits() || (got.is_nan() && want.is_nan());
-            assert!(same, "{min:?} {max:?}: {got} for {want}");
-        }
-    }
-
-    #[test]
-    fn bins_of_truncates_exactly_like_as() {
-        for x in samples() {
-            let position = bin_position(x, 0.0, 1.0);
-            let expected = position as u32;
-            assert_eq!(bins_of([x; 4], [0.0; 4], [1.0; 4]), [expected; 4], "{x}");
-            let lanes = bin_positions(f32x4::splat(x), f32x4::ZERO, f32x4::ONE).to_array();
-            assert_eq!(lanes.map(f32::to_bits), [position.to_bits(); 4], "{x}");
-            for bin in 1..BINS {
-                assert_eq!(
-                    goes_left(lanes[0], bin),
-                    (expected as usize) < bin,
-                    "{x} {bin}"
-                );
-            }
-        }
-    }
-}
+#[path = "bins_tests.rs"]
+mod tests;
