@@ -114,13 +114,14 @@ impl Box4 {
 }
 
 /// A primitive's box and its index, moved as one 32-byte unit by the
-/// partitions; each corner loads as one [`Lanes`]. The unused fourth lane of
-/// `hi` holds the index's bits (see [`PrimRef::centroid_x4`]).
+/// partitions; each corner loads as one [`Lanes`]. The upper corner is kept
+/// negated, the bins' form (see [`PrimRef::flipped`]); the unused fourth lane of
+/// `neg_hi` holds the index's bits (see [`PrimRef::centroid_x4`]).
 #[derive(Clone, Copy)]
 #[repr(C, align(16))]
 struct PrimRef {
     lo: Lanes,
-    hi: Lanes,
+    neg_hi: Lanes,
 }
 
 impl PrimRef {
@@ -131,28 +132,37 @@ impl PrimRef {
         let (lo, hi) = (b.min, b.max);
         PrimRef {
             lo: [pick(lo.x, hi.x), pick(lo.y, hi.y), pick(lo.z, hi.z), 0.0],
-            hi: [
-                pick(hi.x, lo.x),
-                pick(hi.y, lo.y),
-                pick(hi.z, lo.z),
+            neg_hi: [
+                -pick(hi.x, lo.x),
+                -pick(hi.y, lo.y),
+                -pick(hi.z, lo.z),
                 f32::from_bits(index as u32),
             ],
         }
     }
 
     fn index(&self) -> u32 {
-        self.hi[3].to_bits()
+        self.neg_hi[3].to_bits()
     }
 
-    /// The box as a [`BinBox`] grows by (the index's lane negated, which no one reads).
+    /// The box as a [`BinBox`] grows by (with the index's lane, which no one reads): the
+    /// two corners as they are, where negating the upper one for each bin took two
+    /// instructions per primitive.
     #[inline(always)]
     fn flipped(&self) -> [f32; 8] {
-        let (lo, hi) = (self.lo, self.hi);
-        [lo[0], lo[1], lo[2], lo[3], -hi[0], -hi[1], -hi[2], -hi[3]]
+        let (lo, n) = (self.lo, self.neg_hi);
+        [lo[0], lo[1], lo[2], lo[3], n[0], n[1], n[2], n[3]]
     }
 
-    /// The centroid in a SIMD register (`addps`, `mulps`: the values of [`Aabb::centroid`],
-    /// so the same bins), with the index's lane zeroed: growing boxes ignores that lane,
+    /// The upper corner (its fourth lane is not a coordinate).
+    #[inline(always)]
+    fn hi(&self) -> Lanes {
+        self.neg_hi.map(|v| -v)
+    }
+
+    /// The centroid in a SIMD register (`subps` of the negated corner, which is exactly
+    /// `addps` of the upper one, and `mulps`: the values of [`Aabb::centroid`], so the
+    /// same bins), with the index's lane zeroed: growing boxes ignores that lane,
     /// but arithmetic on the index's bits could meet subnormals (slow) or NaN. Zeroed by
     /// a mask (`andps`), not by inserting a zero: then the partition and the binning move
     /// the upper corner as one register, where they kept the index apart (the partition
@@ -160,8 +170,8 @@ impl PrimRef {
     #[inline(always)]
     fn centroid_x4(&self) -> f32x4 {
         let keep = f32::from_bits(u32::MAX);
-        let hi = f32x4::from(self.hi) & f32x4::from([keep, keep, keep, 0.0]);
-        (f32x4::from(self.lo) + hi) * f32x4::splat(0.5)
+        let neg_hi = f32x4::from(self.neg_hi) & f32x4::from([keep, keep, keep, 0.0]);
+        (f32x4::from(self.lo) - neg_hi) * f32x4::splat(0.5)
     }
 
     /// [`PrimRef::centroid_x4`] in [`Lanes`].
@@ -186,7 +196,7 @@ impl NodeBounds {
 
     fn of(refs: &[PrimRef]) -> NodeBounds {
         let fold = |mut acc: NodeBounds, r: &PrimRef| {
-            acc.node.grow(r.lo, r.hi);
+            acc.node.grow(r.lo, r.hi());
             let c = r.centroid();
             acc.centroids.grow(c, c);
             acc
