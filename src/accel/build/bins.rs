@@ -6,7 +6,7 @@
 
 use multiversion::multiversion;
 use rayon::prelude::*;
-use wide::u32x4;
+use wide::{f32x4, u32x4};
 
 use super::{BINS, Box4, Lanes, PARALLEL_BIN_CHUNK, PrimRef, TWO_SETS_MIN, blocks};
 
@@ -49,13 +49,11 @@ impl BinBox {
     /// symmetric), so the products and sums are the extent's, and it is positive
     /// exactly where `lo > hi` (an empty axis). The empty test is a select after the
     /// area, not three branches before it: the SAH sweep computes two areas per plane.
-    #[inline(always)]
+    /// The sweep's [`SweepBox`] computes it; this form is the tests' link to [`Box4`].
+    #[cfg(test)]
     fn surface_area(&self) -> f32 {
         let b = self.0;
-        let d: [f32; 4] = std::array::from_fn(|i| b[i] + b[4 + i]);
-        let area = 2.0 * (d[0] * d[1] + d[1] * d[2] + d[2] * d[0]);
-        let empty = (d[0] > 0.0) | (d[1] > 0.0) | (d[2] > 0.0);
-        if empty { 0.0 } else { area }
+        extent_area(std::array::from_fn(|i| b[i] + b[4 + i]))
     }
 
     #[inline(always)]
@@ -71,6 +69,47 @@ impl BinBox {
     fn of(b: Box4) -> BinBox {
         let (lo, hi) = (b.min, b.max);
         BinBox([lo[0], lo[1], lo[2], lo[3], -hi[0], -hi[1], -hi[2], -hi[3]])
+    }
+}
+
+/// The surface area of a box from its negated extent `d` (a lower plus a negated upper
+/// corner, see [`BinBox::surface_area`]); 0 where an axis is empty (positive).
+#[inline(always)]
+fn extent_area(d: Lanes) -> f32 {
+    let area = 2.0 * (d[0] * d[1] + d[1] * d[2] + d[2] * d[0]);
+    let empty = (d[0] > 0.0) | (d[1] > 0.0) | (d[2] > 0.0);
+    if empty { 0.0 } else { area }
+}
+
+/// A [`BinBox`] as two SIMD halves, the SAH sweep's running box: one `minps` per half
+/// (the same values as [`BinBox::union`]), where the union of eight lanes was loaded
+/// in pieces around the unused lanes and put together by shuffles.
+#[derive(Clone, Copy)]
+struct SweepBox {
+    lo: f32x4,
+    neg_hi: f32x4,
+}
+
+impl SweepBox {
+    fn empty() -> SweepBox {
+        SweepBox {
+            lo: f32x4::splat(f32::INFINITY),
+            neg_hi: f32x4::splat(f32::INFINITY),
+        }
+    }
+
+    /// Grows to contain `b`: per lane `b < self ? b : self`, as [`BinBox::grow`].
+    #[inline(always)]
+    fn grow(&mut self, b: &BinBox) {
+        let [l0, l1, l2, l3, h0, h1, h2, h3] = b.0;
+        self.lo = f32x4::from([l0, l1, l2, l3]).fast_min(self.lo);
+        self.neg_hi = f32x4::from([h0, h1, h2, h3]).fast_min(self.neg_hi);
+    }
+
+    /// [`BinBox::surface_area`] of the same box, bit for bit.
+    #[inline(always)]
+    fn surface_area(&self) -> f32 {
+        extent_area((self.lo + self.neg_hi).to_array())
     }
 }
 
@@ -296,7 +335,7 @@ pub(super) fn best_sah_plane(bins: &Bins) -> Option<Plane> {
         // right_cost[r]: area * blocks of the occupied bins from the r-th (counting
         // from 0 upwards) on, for r >= 1 (the lowest occupied bin is never on the right).
         let mut right_cost = [0.0f32; BINS];
-        let mut acc_box = BinBox::EMPTY;
+        let mut acc_box = SweepBox::empty();
         let mut acc_n = 0u32;
         let mut rank = occupied.count_ones() as usize;
         let mut rest = occupied & occupied.wrapping_sub(1);
@@ -304,13 +343,13 @@ pub(super) fn best_sah_plane(bins: &Bins) -> Option<Plane> {
             let k = (u32::BITS - 1 - rest.leading_zeros()) as usize % BINS;
             rest ^= 1 << k;
             rank -= 1;
-            acc_box = acc_box.union(boxes[k]);
+            acc_box.grow(&boxes[k]);
             acc_n += counts[k];
             right_cost[rank % BINS] = acc_box.surface_area() * blocks(acc_n);
         }
         // The plane after each occupied bin but the highest (which has nothing
         // on its right).
-        let mut left_box = BinBox::EMPTY;
+        let mut left_box = SweepBox::empty();
         let mut left_n = 0u32;
         let mut rank = 0;
         let highest = u32::BITS - 1 - occupied.leading_zeros();
@@ -319,7 +358,7 @@ pub(super) fn best_sah_plane(bins: &Bins) -> Option<Plane> {
             let k = rest.trailing_zeros() as usize % BINS;
             rest &= rest - 1;
             rank += 1;
-            left_box = left_box.union(boxes[k]);
+            left_box.grow(&boxes[k]);
             left_n += counts[k];
             let cost = left_box.surface_area() * blocks(left_n) + right_cost[rank % BINS];
             let better = cost < best_cost;
