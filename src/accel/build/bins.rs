@@ -1,11 +1,12 @@
 //! The binned SAH's bins (after Wald 2007, see [`super`]): each node's primitives
 //! counted and boxed per axis in `BINS` bins of their centroids, the sweep that costs
-//! every plane between bins, and the in-place partition by the chosen plane. Binning
-//! and partition place a centroid by the same arithmetic, so they always agree.
+//! every plane between bins, and the in-place partition by the chosen plane. The
+//! partition compares centroids with the least one that bins right of the plane
+//! ([`first_right`]), which the binning's arithmetic decides, so they always agree.
 
 use multiversion::multiversion;
 use rayon::prelude::*;
-use wide::f32x4;
+use wide::{f32x4, u32x4};
 
 use super::{BINS, Box4, Lanes, PARALLEL_BIN_CHUNK, PrimRef, TWO_SETS_MIN, blocks};
 
@@ -46,15 +47,13 @@ impl BinBox {
     /// NaN cost never wins), without negating the upper corner: a lower plus a negated
     /// upper coordinate is `lo - hi`, exactly the extent negated (IEEE rounding is
     /// symmetric), so the products and sums are the extent's, and it is positive
-    /// exactly where `lo > hi` (an empty axis).
-    #[inline(always)]
+    /// exactly where `lo > hi` (an empty axis). The empty test is a select after the
+    /// area, not three branches before it: the SAH sweep computes two areas per plane.
+    /// The sweep's [`SweepBox`] computes it; this form is the tests' link to [`Box4`].
+    #[cfg(test)]
     fn surface_area(&self) -> f32 {
         let b = self.0;
-        let d: [f32; 4] = std::array::from_fn(|i| b[i] + b[4 + i]);
-        if d[0] > 0.0 || d[1] > 0.0 || d[2] > 0.0 {
-            return 0.0;
-        }
-        2.0 * (d[0] * d[1] + d[1] * d[2] + d[2] * d[0])
+        extent_area(std::array::from_fn(|i| b[i] + b[4 + i]))
     }
 
     #[inline(always)]
@@ -70,6 +69,47 @@ impl BinBox {
     fn of(b: Box4) -> BinBox {
         let (lo, hi) = (b.min, b.max);
         BinBox([lo[0], lo[1], lo[2], lo[3], -hi[0], -hi[1], -hi[2], -hi[3]])
+    }
+}
+
+/// The surface area of a box from its negated extent `d` (a lower plus a negated upper
+/// corner, see [`BinBox::surface_area`]); 0 where an axis is empty (positive).
+#[inline(always)]
+fn extent_area(d: Lanes) -> f32 {
+    let area = 2.0 * (d[0] * d[1] + d[1] * d[2] + d[2] * d[0]);
+    let empty = (d[0] > 0.0) | (d[1] > 0.0) | (d[2] > 0.0);
+    if empty { 0.0 } else { area }
+}
+
+/// A [`BinBox`] as two SIMD halves, the SAH sweep's running box: one `minps` per half
+/// (the same values as [`BinBox::union`]), where the union of eight lanes was loaded
+/// in pieces around the unused lanes and put together by shuffles.
+#[derive(Clone, Copy)]
+struct SweepBox {
+    lo: f32x4,
+    neg_hi: f32x4,
+}
+
+impl SweepBox {
+    fn empty() -> SweepBox {
+        SweepBox {
+            lo: f32x4::splat(f32::INFINITY),
+            neg_hi: f32x4::splat(f32::INFINITY),
+        }
+    }
+
+    /// Grows to contain `b`: per lane `b < self ? b : self`, as [`BinBox::grow`].
+    #[inline(always)]
+    fn grow(&mut self, b: &BinBox) {
+        let [l0, l1, l2, l3, h0, h1, h2, h3] = b.0;
+        self.lo = f32x4::from([l0, l1, l2, l3]).fast_min(self.lo);
+        self.neg_hi = f32x4::from([h0, h1, h2, h3]).fast_min(self.neg_hi);
+    }
+
+    /// [`BinBox::surface_area`] of the same box, bit for bit.
+    #[inline(always)]
+    fn surface_area(&self) -> f32 {
+        extent_area((self.lo + self.neg_hi).to_array())
     }
 }
 
@@ -188,12 +228,26 @@ impl Bins {
         self
     }
 
-    /// The boxes of the primitives left and right of `plane`.
+    /// The boxes of the primitives left and right of `plane`: the unions of its axis's
+    /// occupied bins in order (an empty bin's box is empty, which changes no union),
+    /// so small nodes skip most of the 16 bins.
     #[inline(always)]
     pub(super) fn boxes_around(&self, plane: &Plane) -> (Box4, Box4) {
         let boxes = &self.boxes[plane.axis];
-        let union = |s: &[BinBox]| s.iter().fold(BinBox::EMPTY, |a, b| a.union(*b)).box4();
-        (union(&boxes[..plane.bin]), union(&boxes[plane.bin..]))
+        let union = |mut bits: u32| {
+            let mut b = BinBox::EMPTY;
+            while bits != 0 {
+                let k = bits.trailing_zeros() as usize % BINS;
+                bits &= bits - 1;
+                b = b.union(boxes[k]);
+            }
+            b.box4()
+        };
+        let below = (1u32 << (plane.bin % BINS)) - 1;
+        (
+            union(plane.occupied & below),
+            union(plane.occupied & !below),
+        )
     }
 }
 
@@ -210,13 +264,15 @@ fn bin_chunk(refs: &[PrimRef], centroids: Box4) -> Bins {
 pub(super) struct Plane {
     axis: usize,
     bin: usize,
+    /// The occupied bins on `axis`, bit `k` for bin `k`.
+    occupied: u32,
     /// Unnormalised SAH cost `A_L B_L + A_R B_R`, `B` counting [`blocks`].
     pub(super) cost: f32,
 }
 
 /// Bin index of a centroid coordinate: `((c - min) * scale)` truncated into
 /// `0..BINS`, NaN → 0, as `as usize` then `min(BINS - 1)` would give; clamped as a
-/// float by compare-and-select. [`goes_left`] is the same test against a plane.
+/// float by compare-and-select. [`first_right`] gives the same sides of a plane.
 #[inline(always)]
 fn bin_position(c: f32, min: f32, scale: f32) -> f32 {
     let x = (c - min) * scale;
@@ -242,21 +298,16 @@ fn bins_of(c: Lanes, min: Lanes, scale: Lanes) -> [u32; 4] {
     })
 }
 
-/// [`bin_position`] of four lanes at once, kept in SIMD registers: `fast_max` /
-/// `fast_min` (`maxps` / `minps`) are exactly its two compare-and-selects.
+/// Bit `k` set when bin `k` holds a primitive: the sign bit of `0 - count` (a count
+/// is far below 2^31), four bins per SIMD subtraction and sign mask, where a compare
+/// and shift per bin took twice the instructions.
 #[inline(always)]
-fn bin_positions(c: f32x4, min: f32x4, scale: f32x4) -> f32x4 {
-    ((c - min) * scale)
-        .fast_max(f32x4::ZERO)
-        .fast_min(f32x4::splat((BINS - 1) as f32))
-}
-
-/// Whether a centroid coordinate whose [`bin_position`] is `x` bins below `bin` (≥ 1):
-/// for `x` ≥ 0, `trunc(x) < bin` exactly when `x < bin`, so no truncation is needed;
-/// the clamps change nothing either side of `bin` (NaN goes to bin 0, left).
-#[inline(always)]
-fn goes_left(x: f32, bin: usize) -> bool {
-    x < bin as f32
+fn occupied_bins(counts: &[u32; BINS]) -> u32 {
+    let mut occupied = 0;
+    for (q, four) in counts.as_chunks::<4>().0.iter().enumerate() {
+        occupied |= (u32x4::ZERO - u32x4::from(*four)).to_bitmask() << (4 * q);
+    }
+    occupied
 }
 
 /// Cheapest binned-SAH plane over the three axes, if any separates the centroids.
@@ -271,23 +322,20 @@ pub(super) fn best_sah_plane(bins: &Bins) -> Option<Plane> {
     // predictor learns: infinity until a plane, so that `cost < best_cost` is also the
     // test that the cost is finite (costs are never below zero; NaN fails it).
     let mut best_cost = f32::INFINITY;
-    let (mut best_axis, mut best_bin) = (0, 0);
+    let (mut best_axis, mut best_bin, mut best_occupied) = (0, 0, 0);
     for axis in 0..3 {
         if bins.scale[axis] == 0.0 {
             continue;
         }
         let (counts, boxes) = (&bins.counts[axis], &bins.boxes[axis]);
-        let mut occupied = 0u32;
-        for (k, &n) in counts.iter().enumerate() {
-            occupied |= u32::from(n > 0) << k;
-        }
+        let occupied = occupied_bins(counts);
         if occupied == 0 {
             continue;
         }
         // right_cost[r]: area * blocks of the occupied bins from the r-th (counting
         // from 0 upwards) on, for r >= 1 (the lowest occupied bin is never on the right).
         let mut right_cost = [0.0f32; BINS];
-        let mut acc_box = BinBox::EMPTY;
+        let mut acc_box = SweepBox::empty();
         let mut acc_n = 0u32;
         let mut rank = occupied.count_ones() as usize;
         let mut rest = occupied & occupied.wrapping_sub(1);
@@ -295,13 +343,13 @@ pub(super) fn best_sah_plane(bins: &Bins) -> Option<Plane> {
             let k = (u32::BITS - 1 - rest.leading_zeros()) as usize % BINS;
             rest ^= 1 << k;
             rank -= 1;
-            acc_box = acc_box.union(boxes[k]);
+            acc_box.grow(&boxes[k]);
             acc_n += counts[k];
             right_cost[rank % BINS] = acc_box.surface_area() * blocks(acc_n);
         }
         // The plane after each occupied bin but the highest (which has nothing
         // on its right).
-        let mut left_box = BinBox::EMPTY;
+        let mut left_box = SweepBox::empty();
         let mut left_n = 0u32;
         let mut rank = 0;
         let highest = u32::BITS - 1 - occupied.leading_zeros();
@@ -310,20 +358,68 @@ pub(super) fn best_sah_plane(bins: &Bins) -> Option<Plane> {
             let k = rest.trailing_zeros() as usize % BINS;
             rest &= rest - 1;
             rank += 1;
-            left_box = left_box.union(boxes[k]);
+            left_box.grow(&boxes[k]);
             left_n += counts[k];
             let cost = left_box.surface_area() * blocks(left_n) + right_cost[rank % BINS];
             let better = cost < best_cost;
             best_cost = if better { cost } else { best_cost };
             best_axis = if better { axis } else { best_axis };
             best_bin = if better { k + 1 } else { best_bin };
+            best_occupied = if better { occupied } else { best_occupied };
         }
     }
     (best_cost < f32::INFINITY).then_some(Plane {
         axis: best_axis,
         bin: best_bin,
+        occupied: best_occupied,
         cost: best_cost,
     })
+}
+
+/// The least centroid coordinate whose bin on an axis with `min` and `scale` (positive;
+/// the chosen axis's) is `bin` (1..BINS) or above: a centroid goes left of the plane
+/// after bin `bin - 1` exactly when `!(c >= first_right)`. The bin's test against a
+/// plane, [`bin_position`] below `bin`, is `!((c - min) * scale >= bin)` (the clamps
+/// change nothing either side of `bin`, and NaN goes to bin 0, left), whose operand
+/// grows with `c` (each rounding step does; +0 and -0 give equal results): so the
+/// partition compares each centroid once instead of computing its bin (four
+/// operations on the loop's branch). Found from the estimate `min + bin / scale` by a
+/// few steps of one ulp, else by bisection over the floats in order.
+fn first_right(min: f32, scale: f32, bin: usize) -> f32 {
+    let right = |c: f32| (c - min) * scale >= bin as f32;
+    let mut c = min + bin as f32 / scale;
+    for _ in 0..8 {
+        if c.is_nan() {
+            break;
+        }
+        if right(c) {
+            let below = c.next_down();
+            if !right(below) {
+                return c;
+            }
+            c = below;
+        } else {
+            c = c.next_up();
+        }
+    }
+    // Floats other than NaN in order as unsigned integers; -inf is left (min is finite:
+    // an infinite centroid makes the extent infinite or NaN and the scale zero) and
+    // +inf right.
+    let key = |f: f32| {
+        let b = f.to_bits();
+        if b >> 31 == 1 { !b } else { b | 1 << 31 }
+    };
+    let float = |k: u32| f32::from_bits(if k >> 31 == 1 { k & !(1 << 31) } else { !k });
+    let (mut left, mut first) = (key(f32::NEG_INFINITY), key(f32::INFINITY));
+    while first - left > 1 {
+        let mid = left + (first - left) / 2;
+        if right(float(mid)) {
+            first = mid;
+        } else {
+            left = mid;
+        }
+    }
+    float(first)
 }
 
 /// In-place partition by `plane`; returns how many primitives go left (now at
@@ -331,232 +427,41 @@ pub(super) fn best_sah_plane(bins: &Bins) -> Option<Plane> {
 /// it decides the primitive order in the leaves.
 #[inline(always)]
 pub(super) fn partition(refs: &mut [PrimRef], bins: &Bins, plane: &Plane) -> (usize, Box4, Box4) {
+    let axis = plane.axis % 3;
+    let first = first_right(bins.min[axis], bins.scale[axis], plane.bin);
     // One loop per axis: a lane picked at run time went through memory.
-    match plane.axis {
-        0 => partition_on::<0>(refs, bins, plane.bin),
-        1 => partition_on::<1>(refs, bins, plane.bin),
-        _ => partition_on::<2>(refs, bins, plane.bin),
+    match axis {
+        0 => partition_on::<0>(refs, first),
+        1 => partition_on::<1>(refs, first),
+        _ => partition_on::<2>(refs, first),
     }
 }
 
-/// [`partition`] on axis `AXIS`.
+/// [`partition`] on axis `AXIS`: centroids below `first_right` go left.
 #[inline(always)]
-fn partition_on<const AXIS: usize>(
-    refs: &mut [PrimRef],
-    bins: &Bins,
-    bin: usize,
-) -> (usize, Box4, Box4) {
-    let (min, scale) = (f32x4::from(bins.min), f32x4::from(bins.scale));
+fn partition_on<const AXIS: usize>(refs: &mut [PrimRef], first_right: f32) -> (usize, Box4, Box4) {
     let mut left = Box4::EMPTY;
     let mut right = Box4::EMPTY;
     let mut i = 0;
     let mut j = refs.len();
     while i < j {
         let r = refs[i];
-        // All four lanes in SIMD registers: picking the axis's lane first made the
-        // compiler take the centroid apart and put it back together.
-        let c = r.centroid_x4();
-        let x = bin_positions(c, min, scale).to_array();
-        let c = c.to_array();
-        if goes_left(x[AXIS], bin) {
-            left.grow(c, c);
-            i += 1;
-        } else {
+        let c = r.centroid_x4().to_array();
+        // NaN goes left (the comparison is false).
+        if c[AXIS] >= first_right {
             right.grow(c, c);
             j -= 1;
             // refs.swap(i, j), without its round trip through the stack.
             refs[i] = refs[j];
             refs[j] = r;
+        } else {
+            left.grow(c, c);
+            i += 1;
         }
     }
     (i, left, right)
 }
 
 #[cfg(test)]
-mod tests {
-    use glam::Vec3;
-
-    use super::super::NodeBounds;
-    use super::*;
-    use crate::accel::Aabb;
-    use crate::test_util::Lcg;
-
-    /// The per-axis sweep [`best_sah_plane`] must agree with (the builder's before it
-    /// swept the axes together).
-    fn best_sah_plane_reference(bins: &Bins) -> Option<Plane> {
-        let mut best: Option<Plane> = None;
-        for axis in 0..3 {
-            if bins.scale[axis] == 0.0 {
-                continue;
-            }
-            let (counts, boxes) = (&bins.counts[axis], &bins.boxes[axis]);
-            // right_cost[k]: area * blocks of bins k.. (the right side of plane k).
-            let mut right_cost = [0.0f32; BINS];
-            let mut acc_box = Box4::EMPTY;
-            let mut acc_n = 0u32;
-            let mut right = f32::INFINITY; // empty right side: not a split
-            for k in (1..BINS).rev() {
-                // An empty bin changes neither the box nor the count: skip the area.
-                if counts[k] > 0 {
-                    acc_box = acc_box.union(boxes[k].box4());
-                    acc_n += counts[k];
-                    right = acc_box.surface_area() * blocks(acc_n);
-                }
-                right_cost[k] = right;
-            }
-            let mut left_box = Box4::EMPTY;
-            let mut left_n = 0u32;
-            for k in 1..BINS {
-                // Plane k costs the same as plane k - 1 when bin k - 1 is empty,
-                // and only a strictly cheaper plane replaces the best one.
-                if counts[k - 1] == 0 {
-                    continue;
-                }
-                left_box = left_box.union(boxes[k - 1].box4());
-                left_n += counts[k - 1];
-                let cost = left_box.surface_area() * blocks(left_n) + right_cost[k];
-                if cost.is_finite() && best.as_ref().is_none_or(|b| cost < b.cost) {
-                    best = Some(Plane { axis, bin: k, cost });
-                }
-            }
-        }
-        best
-    }
-
-    #[test]
-    fn sweep_matches_the_per_axis_reference() {
-        // Bins as nodes of a few to many primitives leave them: mostly empty to full,
-        // flat and inverted (empty) boxes, infinite coordinates, ties between bins
-        // and between axes (copied boxes), an axis with zero extent.
-        let mut rng = Lcg(0x9e37_79b9_7f4a_7c15);
-        let mut planes = 0;
-        for round in 0..20_000 {
-            let mut bins = Bins::empty(Box4::EMPTY);
-            let full = rng.below(17);
-            for axis in 0..3 {
-                bins.scale[axis] = if rng.below(13) == 0 { 0.0 } else { 1.0 };
-                for k in 0..BINS {
-                    if rng.below(16) >= full {
-                        continue;
-                    }
-                    bins.counts[axis][k] = rng.below(9) + 1;
-                    let v: [f32; 4] = std::array::from_fn(|_| rng.below(64) as f32 * 0.25 - 8.0);
-                    let (lo, hi): (Lanes, Lanes) = match rng.below(20) {
-                        0 => (Box4::EMPTY.min, Box4::EMPTY.max),
-                        1 => ([f32::NEG_INFINITY, 0.0, 0.0, 0.0], [1.0, 1.0, 1.0, 0.0]),
-                        2 => ([v[0], v[1], 0.0, 0.0], [v[0], 8.0, 0.0, 0.0]),
-                        _ => (
-                            [v[0], v[1], v[2], 0.0],
-                            [v[0] + v[3] + 8.0, v[1] + 4.0, v[2] + 2.0, 0.0],
-                        ),
-                    };
-                    bins.boxes[axis][k] = BinBox::of(Box4 { min: lo, max: hi });
-                }
-            }
-            if round % 7 == 0 {
-                bins.counts[1] = bins.counts[0];
-                bins.boxes[1] = bins.boxes[0];
-            }
-            let got = best_sah_plane(&bins).map(|p| (p.axis, p.bin, p.cost.to_bits()));
-            let want = best_sah_plane_reference(&bins).map(|p| (p.axis, p.bin, p.cost.to_bits()));
-            assert_eq!(got, want, "round {round}");
-            planes += usize::from(got.is_some());
-        }
-        assert!(planes > 10_000, "{planes}");
-    }
-
-    #[test]
-    fn two_sets_of_bins_match_one_pass_bit_for_bit() {
-        // Coordinates of +0 and -0 (ties the order decides) among a few values,
-        // enough primitives for the two sets; odd and even counts.
-        let mut rng = Lcg(0x2545_f491_4f6c_dd1d);
-        for n in [TWO_SETS_MIN, 999, 4096] {
-            let values = [0.0f32, -0.0, 1.0, -1.0, 0.5];
-            let refs: Vec<PrimRef> = (0..n)
-                .map(|i| {
-                    let mut v = || values[rng.below(5) as usize];
-                    let lo = Vec3::new(v(), v(), v());
-                    let hi = lo + Vec3::new(v().abs(), v().abs(), v().abs());
-                    PrimRef::new(i, &Aabb::new(lo, hi))
-                })
-                .collect();
-            let centroids = NodeBounds::of(&refs).centroids;
-            let mut two = Bins::empty(centroids);
-            two.add(&refs);
-            let mut one = Bins::empty(centroids);
-            for r in &refs {
-                one.add_one(r);
-            }
-            // The fourth row counts the unused lane and is never merged or read.
-            assert_eq!(one.counts[..3], two.counts[..3], "{n}");
-            for axis in 0..3 {
-                for k in 0..BINS {
-                    let bits = |b: &Bins| b.boxes[axis][k].0.map(f32::to_bits);
-                    assert_eq!(bits(&one), bits(&two), "{n} prims, axis {axis} bin {k}");
-                }
-            }
-        }
-    }
-
-    /// Every float the binning can meet near the bin edges, and the awkward ones.
-    fn samples() -> Vec<f32> {
-        let mut xs = vec![
-            0.0, -0.0, -1.0, 1e-30, 0.5, 1.5, 2.5, 14.5, 15.0, 15.5, 16.0,
-        ];
-        xs.extend([1e9, f32::MAX, f32::INFINITY, f32::NEG_INFINITY, f32::NAN]);
-        for k in 0..=BINS as u32 {
-            let b = k as f32;
-            xs.extend([b, b.next_down(), b.next_up(), b + 0.25, b + 0.5, b + 0.75]);
-        }
-        for i in 0..10_000 {
-            xs.push(i as f32 * 0.0017);
-        }
-        xs
-    }
-
-    #[test]
-    fn bin_box_area_is_box4_area_bit_for_bit_or_both_nan() {
-        // Every pair of corner coordinates from awkward values, per axis: boxes empty
-        // on any one axis, flat, infinite, signed zeros, NaN.
-        let values = [
-            -1e30f32,
-            -2.5,
-            -0.0,
-            0.0,
-            1e-40,
-            0.75,
-            3.0,
-            f32::INFINITY,
-            f32::NEG_INFINITY,
-            f32::NAN,
-        ];
-        let mut rng = Lcg(0x5851_f42d_4c95_7f2d);
-        for _ in 0..50_000 {
-            let mut pick = || values[rng.below(values.len() as u32) as usize];
-            let min: Lanes = [pick(), pick(), pick(), 0.0];
-            let max: Lanes = [pick(), pick(), pick(), 0.0];
-            let b = Box4 { min, max };
-            let (got, want) = (BinBox::of(b).surface_area(), b.surface_area());
-            let same = got.to_bits() == want.to_bits() || (got.is_nan() && want.is_nan());
-            assert!(same, "{min:?} {max:?}: {got} for {want}");
-        }
-    }
-
-    #[test]
-    fn bins_of_truncates_exactly_like_as() {
-        for x in samples() {
-            let position = bin_position(x, 0.0, 1.0);
-            let expected = position as u32;
-            assert_eq!(bins_of([x; 4], [0.0; 4], [1.0; 4]), [expected; 4], "{x}");
-            let lanes = bin_positions(f32x4::splat(x), f32x4::ZERO, f32x4::ONE).to_array();
-            assert_eq!(lanes.map(f32::to_bits), [position.to_bits(); 4], "{x}");
-            for bin in 1..BINS {
-                assert_eq!(
-                    goes_left(lanes[0], bin),
-                    (expected as usize) < bin,
-                    "{x} {bin}"
-                );
-            }
-        }
-    }
-}
+#[path = "bins_tests.rs"]
+mod tests;
