@@ -10,7 +10,7 @@
 use multiversion::multiversion;
 
 use super::leaf::{LANES, RayLeaf, groups_for, leaf_count};
-use super::triangle::{RayShear, TriangleHit, intersect_triangle_flagged};
+use super::triangle::{RayShear, TriangleHit};
 use super::wide_packet::PacketHits;
 use super::{Ray, WideBvh};
 
@@ -36,10 +36,10 @@ impl RayLeaves<'_> {
     /// values where they decide it), both against `*bound`;
     /// `hit(prim, lane, hit, bound)` may lower the bound and returns true to stop
     /// (`lane`: `group * LANES + lane`, where the triangle's vertices are).
-    /// `DECIDE`: take a lane's hit from the prefilter's values where they decide it
-    /// (what pays for closest hits; any-hit queries mostly stop at their first hit).
+    /// Any-hit queries too take a lane's hit from the prefilter's values: the scalar
+    /// test on each candidate lane cost the shadow rays 8% more instructions.
     #[inline(always)]
-    fn hits<const DECIDE: bool>(
+    fn hits(
         &self,
         group: usize,
         count: u32,
@@ -58,12 +58,7 @@ impl RayLeaves<'_> {
             while lanes != 0 {
                 let lane = lanes.trailing_zeros() as usize;
                 lanes &= lanes - 1;
-                let h = if DECIDE {
-                    candidates.hit(lane, g, degenerate, &self.shear, ray.origin, *bound)
-                } else {
-                    let tri = g.triangle(lane);
-                    intersect_triangle_flagged(&self.shear, ray.origin, tri, *bound, degenerate)
-                };
+                let h = candidates.hit(lane, g, degenerate, &self.shear, ray.origin, *bound);
                 let Some(h) = h else {
                     continue;
                 };
@@ -98,7 +93,7 @@ impl LeafVisitor for ClosestLeaves<'_> {
     fn leaf(&mut self, group: usize, count: u32, t_max: &mut f32) -> bool {
         let (best, limit) = (&mut self.best, self.limit);
         self.leaves
-            .hits::<true>(group, count, &mut self.bound, |p, lane, h, bound| {
+            .hits(group, count, &mut self.bound, |p, lane, h, bound| {
                 if best.is_none_or(|(bp, _, bh)| h.t < bh.t || (h.t == bh.t && p < bp)) {
                     *t_max = h.t;
                     *bound = three_ulps_up(h.t).min(limit);
@@ -131,7 +126,7 @@ impl<F: FnMut(u32, &TriangleHit) -> bool> LeafVisitor for AnyLeaves<'_, F> {
     fn leaf(&mut self, group: usize, count: u32, _: &mut f32) -> bool {
         let visit = &mut self.visit;
         self.leaves
-            .hits::<false>(group, count, &mut self.bound, |p, _, h, _| visit(p, h))
+            .hits(group, count, &mut self.bound, |p, _, h, _| visit(p, h))
     }
 }
 
