@@ -377,9 +377,7 @@ impl Candidates {
     ) -> Option<TriangleHit> {
         // The vertices are read only where they are needed: the scalar test, and the
         // exact degenerate test in leaves that hold a degenerate triangle.
-        let scalar = || {
-            intersect_triangle_flagged(shear, origin, g.triangle(lane), t_max, may_be_degenerate)
-        };
+        let scalar = || scalar_lane(g, lane, shear, origin, t_max, may_be_degenerate);
         if self.zero & (1 << lane) != 0 {
             return scalar();
         }
@@ -415,6 +413,23 @@ impl Candidates {
             b2: w * inv_det,
         })
     }
+}
+
+/// The scalar test on lane `lane` of `g`, for the few lanes whose values do not decide
+/// it: out of line and cold, so that the hot path builds nothing for it. As a closure
+/// inlined into `Candidates::hit` it was compiled apart all the same, and each lane
+/// tested stored its nine captures first (primary rays: 20 instructions per hit).
+#[cold]
+#[inline(never)]
+fn scalar_lane(
+    g: &TriGroup,
+    lane: usize,
+    shear: &RayShear,
+    origin: Vec3,
+    t_max: f32,
+    may_be_degenerate: bool,
+) -> Option<TriangleHit> {
+    intersect_triangle_flagged(shear, origin, g.triangle(lane), t_max, may_be_degenerate)
 }
 
 /// True when `t` exceeds three times the scalar test's bound on its rounding error

@@ -10,7 +10,7 @@
 use multiversion::multiversion;
 
 use super::leaf::{LANES, RayLeaf, groups_for, leaf_count};
-use super::triangle::{RayShear, TriangleHit, intersect_triangle_flagged};
+use super::triangle::{RayShear, TriangleHit};
 use super::wide_packet::PacketHits;
 use super::{Ray, WideBvh};
 
@@ -36,10 +36,10 @@ impl RayLeaves<'_> {
     /// values where they decide it), both against `*bound`;
     /// `hit(prim, lane, hit, bound)` may lower the bound and returns true to stop
     /// (`lane`: `group * LANES + lane`, where the triangle's vertices are).
-    /// `DECIDE`: take a lane's hit from the prefilter's values where they decide it
-    /// (what pays for closest hits; any-hit queries mostly stop at their first hit).
+    /// Any-hit queries too take a lane's hit from the prefilter's values: the scalar
+    /// test on each candidate lane cost the shadow rays 8% more instructions.
     #[inline(always)]
-    fn hits<const DECIDE: bool>(
+    fn hits(
         &self,
         group: usize,
         count: u32,
@@ -58,12 +58,7 @@ impl RayLeaves<'_> {
             while lanes != 0 {
                 let lane = lanes.trailing_zeros() as usize;
                 lanes &= lanes - 1;
-                let h = if DECIDE {
-                    candidates.hit(lane, g, degenerate, &self.shear, ray.origin, *bound)
-                } else {
-                    let tri = g.triangle(lane);
-                    intersect_triangle_flagged(&self.shear, ray.origin, tri, *bound, degenerate)
-                };
+                let h = candidates.hit(lane, g, degenerate, &self.shear, ray.origin, *bound);
                 let Some(h) = h else {
                     continue;
                 };
@@ -98,15 +93,25 @@ impl LeafVisitor for ClosestLeaves<'_> {
     fn leaf(&mut self, group: usize, count: u32, t_max: &mut f32) -> bool {
         let (best, limit) = (&mut self.best, self.limit);
         self.leaves
-            .hits::<true>(group, count, &mut self.bound, |p, lane, h, bound| {
+            .hits(group, count, &mut self.bound, |p, lane, h, bound| {
                 if best.is_none_or(|(bp, _, bh)| h.t < bh.t || (h.t == bh.t && p < bp)) {
                     *t_max = h.t;
-                    *bound = h.t.next_up().next_up().next_up().min(limit);
+                    *bound = three_ulps_up(h.t).min(limit);
                     *best = Some((p, lane, *h));
                 }
                 false
             })
     }
+}
+
+/// `t.next_up()` three times, for a hit's t (positive and finite): positive floats are
+/// ordered like their bits, and the one past `f32::MAX` is infinity, where `next_up`
+/// stays. Integer arithmetic, where the three `next_up` were about 40 instructions of
+/// NaN, infinity and sign checks per closer hit.
+#[inline(always)]
+fn three_ulps_up(t: f32) -> f32 {
+    debug_assert!(t > 0.0 && t.is_finite(), "{t}");
+    f32::from_bits((t.to_bits() + 3).min(f32::INFINITY.to_bits()))
 }
 
 /// The any-hit query's leaf test and the caller's visitor.
@@ -121,7 +126,7 @@ impl<F: FnMut(u32, &TriangleHit) -> bool> LeafVisitor for AnyLeaves<'_, F> {
     fn leaf(&mut self, group: usize, count: u32, _: &mut f32) -> bool {
         let visit = &mut self.visit;
         self.leaves
-            .hits::<false>(group, count, &mut self.bound, |p, _, h, _| visit(p, h))
+            .hits(group, count, &mut self.bound, |p, _, h, _| visit(p, h))
     }
 }
 
@@ -250,4 +255,32 @@ fn occluded_packet_dispatched(wide: &WideBvh, rays: &[Ray], t_max: &[f32]) -> u3
 #[multiversion(targets("x86_64+avx2+fma", "x86_64+sse4.2"))]
 fn closest_packet_dispatched(wide: &WideBvh, rays: &[Ray], t_max: &[f32]) -> PacketHits {
     wide.closest_packet_inlined(rays, t_max)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::three_ulps_up;
+
+    #[test]
+    fn three_ulps_up_is_three_next_ups() {
+        let mut ts = vec![
+            f32::from_bits(1),
+            f32::MIN_POSITIVE.next_down(),
+            f32::MIN_POSITIVE,
+            1e-30,
+            0.5,
+            1.0,
+            1.0f32.next_down(),
+            3.7e12,
+            f32::MAX,
+        ];
+        // Up to three floats below the largest: the steps into infinity.
+        for _ in 0..4 {
+            ts.push(ts.last().unwrap().next_down());
+        }
+        for t in ts {
+            let want = t.next_up().next_up().next_up();
+            assert_eq!(three_ulps_up(t).to_bits(), want.to_bits(), "{t:e}");
+        }
+    }
 }

@@ -288,6 +288,34 @@ fn any_hit_visits_every_crossing_until_told_to_stop() {
 }
 
 #[test]
+fn any_hit_visits_each_triangle_with_the_scalar_tests_hit() {
+    // Every hit the any-hit query reports, barycentrics too, is the scalar test's bit for
+    // bit (its leaves take decided lanes from the prefilter's values), and none is missed.
+    let bits = |p: u32, h: &TriangleHit| (p, [h.t, h.b0, h.b1, h.b2].map(f32::to_bits));
+    let tris = random_tris(3000, 8);
+    let (_, wide) = both(&tris, SplitMethod::SahBinned);
+    let mut visits = 0;
+    for (ray, t_max) in rays(1500, 9) {
+        let mut seen = Vec::new();
+        wide.any_hit(&ray, t_max, |p, h| {
+            seen.push(bits(p, h));
+            false
+        });
+        seen.sort();
+        let s = RayShear::new(&ray);
+        let expect: Vec<_> = (0..tris.len() as u32)
+            .filter_map(|p| {
+                let [a, b, c] = tris[p as usize];
+                intersect_triangle_sheared(&s, ray.origin, a, b, c, t_max).map(|h| bits(p, &h))
+            })
+            .collect();
+        assert_eq!(seen, expect, "{ray:?}");
+        visits += seen.len();
+    }
+    assert!(visits > 300, "only {visits} visits");
+}
+
+#[test]
 fn dispatched_queries_match_the_baseline_build_bit_for_bit() {
     // `closest_hit` runs the clone for this CPU's features (AVX2+FMA here where the CPU
     // has it); `*_inlined` called from this test is compiled for the baseline target.
