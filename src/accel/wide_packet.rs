@@ -28,6 +28,7 @@ use super::bvh::MAX_DEPTH;
 use super::leaf::{LANES, TriGroup, clear_of_zero, groups_for, leaf_count};
 use super::triangle::{RayShear, TriangleHit, intersect_triangle_flagged, is_degenerate};
 use super::wide_node::{EMPTY, WIDTH, WideNode, leaf_lanes};
+use super::wide_query::three_ulps_up;
 use super::{BOX_MARGIN, Ray, WideBvh};
 
 /// Rays per packet: one AVX2 register of f32.
@@ -466,19 +467,6 @@ impl PacketCandidates {
 /// Each ray's closest hit in a packet: the triangle's index, where it sits in the
 /// leaves (`group * LANES + lane`) and the hit, as [`WideBvh::closest_hit_at`] gives it.
 pub type PacketHits = [Option<(u32, u32, TriangleHit)>; PACKET];
-
-/// `t.next_up().next_up().next_up()` for a hit distance (`t > 0`, not NaN): three
-/// steps up the bit pattern while that stays finite (positive floats order as their
-/// bits), else the steps themselves.
-#[inline(always)]
-fn three_ulps_up(t: f32) -> f32 {
-    let bits = t.to_bits();
-    if bits < f32::MAX.to_bits() - 2 {
-        f32::from_bits(bits + 3)
-    } else {
-        t.next_up().next_up().next_up()
-    }
-}
 
 /// Sort key of child `c` entered at `t` (not NaN, not below zero): by t, then child.
 #[inline(always)]

@@ -271,23 +271,3 @@ fn an_empty_tree_occludes_nothing() {
     assert_eq!(wide.occluded_packet(&[], &[]), 0);
     assert_eq!(wide.closest_packet(&r, &[1.0; 3]), [None; PACKET]);
 }
-
-#[test]
-fn three_ulps_up_is_three_next_ups_for_every_hit_distance() {
-    let mut rng = Lcg(11);
-    let mut ts = vec![
-        f32::from_bits(1),
-        f32::MIN_POSITIVE,
-        f32::MIN_POSITIVE.next_down(),
-        1.0,
-        f32::MAX,
-        f32::MAX.next_down(),
-        f32::MAX.next_down().next_down(),
-        f32::MAX.next_down().next_down().next_down(),
-    ];
-    ts.extend((0..10_000).map(|_| f32::from_bits(1 + rng.below(0x7f7f_ffff))));
-    for t in ts {
-        let expected = t.next_up().next_up().next_up();
-        assert_eq!(three_ulps_up(t).to_bits(), expected.to_bits(), "t = {t:e}");
-    }
-}

@@ -109,7 +109,7 @@ impl LeafVisitor for ClosestLeaves<'_> {
 /// stays. Integer arithmetic, where the three `next_up` were about 40 instructions of
 /// NaN, infinity and sign checks per closer hit.
 #[inline(always)]
-fn three_ulps_up(t: f32) -> f32 {
+pub(super) fn three_ulps_up(t: f32) -> f32 {
     debug_assert!(t > 0.0 && t.is_finite(), "{t}");
     f32::from_bits((t.to_bits() + 3).min(f32::INFINITY.to_bits()))
 }
@@ -278,6 +278,8 @@ mod tests {
         for _ in 0..4 {
             ts.push(ts.last().unwrap().next_down());
         }
+        // And a spread over every binade of positive finite floats.
+        ts.extend((1..f32::MAX.to_bits()).step_by(9_973).map(f32::from_bits));
         for t in ts {
             let want = t.next_up().next_up().next_up();
             assert_eq!(three_ulps_up(t).to_bits(), want.to_bits(), "{t:e}");
