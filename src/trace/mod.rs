@@ -6,6 +6,7 @@ pub mod camera;
 mod camera_samples;
 mod crossings;
 pub mod geometry;
+mod lane_models;
 pub mod lights;
 pub mod log;
 pub mod materials;

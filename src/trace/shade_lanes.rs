@@ -1,7 +1,7 @@
-//! The render's Lambertian shading with hits in lanes: [`LANES`] hits at a time, their
-//! positions, normals and weights side by side (SoA), each light sample made for all of
-//! them at once, per light kind, and `l = normalize(sample - p)` and the model done as
-//! `[f32; LANES]` loops (which the AVX2 clone turns into ymm code). The scalar loop in
+//! The render's shading with hits in lanes (Lambertian, Phong, Blinn-Phong): [`LANES`]
+//! hits at a time, their positions, normals and weights side by side (SoA), each light
+//! sample made for all of them at once, per light kind, and `l = normalize(sample - p)`
+//! and the model (`lane_models.rs`) done as `[f32; LANES]` loops (which the AVX2 clone turns into ymm code). The scalar loop in
 //! `wavefront.rs` handled every light and sampler kind per sample, one hit at a time.
 //!
 //! Same values bit for bit: every lane does the scalar code's f32 operations in the
@@ -16,43 +16,15 @@ use multiversion::multiversion;
 
 use rayon::prelude::*;
 
+pub(super) use super::lane_models::LaneModel;
+use super::lane_models::{
+    HitLanes, LANES, Lanes, Lanes3, SampleLanes, blinn_phong_sample, phong_sample, shade_sample,
+};
 use super::shadow::{CHUNK, ShadowQueue, ShadowRay};
 use super::surface::{MIN_OFFSET_COORDINATE, Surface};
 use super::wavefront::{QueuedRay, ShadeContext, blend_alpha};
 use crate::accel::Ray;
-use crate::sampling::{PointSampler, SLOT_LANES, SlotLanes};
-
-/// Hits shaded together.
-pub const LANES: usize = SLOT_LANES;
-
-/// One f32 per lane.
-type Lanes = [f32; LANES];
-
-/// Three coordinates, each over the lanes.
-type Lanes3 = [Lanes; 3];
-
-/// What the model reads of the group's hits, in lanes (lanes without a hit hold what
-/// an earlier group left there, or zeros, and are never read back).
-#[derive(Clone, Copy, Debug, Default)]
-struct HitLanes {
-    p: Lanes3,
-    p_error: Lanes3,
-    ng: Lanes3,
-    n: Lanes3,
-    kd: Lanes3,
-    w: Lanes3,
-}
-
-/// One light sample over the lanes: where it is, what it adds (`c`), and whether it
-/// adds anything (`keep`: the direction to it could be normalized, else the scalar loop
-/// skips the sample, and `c` is not all zeros).
-#[derive(Clone, Copy, Debug, Default)]
-struct SampleLanes {
-    position: Lanes3,
-    c: Lanes3,
-    // As u32 (0 or 1), not bool: the lanes store it as one vector, bools one by one.
-    keep: [u32; LANES],
-}
+use crate::sampling::{PointSampler, SlotLanes};
 
 /// What a chunk's groups reuse, neither zeroed nor allocated per group.
 #[derive(Debug, Default)]
@@ -68,33 +40,6 @@ fn unit(x: f32) -> f32 {
         if x < 1.0 { x } else { 1.0 }
     } else {
         0.0
-    }
-}
-
-/// The Lambertian contribution of light sample (`position`, `color`) at each lane's hit:
-/// `ShadingInput`'s `lambertian(..) * w` after `try_normalize`, operation for operation.
-#[multiversion(targets("x86_64+avx2+fma", "x86_64+sse4.2"))]
-fn shade_sample(hits: &HitLanes, position: &Lanes3, color: &Lanes3, out: &mut SampleLanes) {
-    out.position = *position;
-    for j in 0..LANES {
-        let lx = position[0][j] - hits.p[0][j];
-        let ly = position[1][j] - hits.p[1][j];
-        let lz = position[2][j] - hits.p[2][j];
-        // glam: `dot` left to right, `length_recip` = 1 / sqrt, then a multiply.
-        let rcp = 1.0 / ((lx * lx) + (ly * ly) + (lz * lz)).sqrt();
-        // `is_finite() && > 0` as two comparisons (NaN fails both).
-        let ok = rcp > 0.0 && rcp < f32::INFINITY;
-        let (lx, ly, lz) = (lx * rcp, ly * rcp, lz * rcp);
-        let cos = (hits.n[0][j] * lx) + (hits.n[1][j] * ly) + (hits.n[2][j] * lz);
-        // `lit` is `cos > 0`; there `cos.max(0.0)` is `cos` itself.
-        let lit = cos > 0.0;
-        for a in 0..3 {
-            let d = color[a][j] * hits.kd[a][j] * cos;
-            let d = if lit && d.is_finite() { d } else { 0.0 };
-            out.c[a][j] = d * hits.w[a][j];
-        }
-        out.keep[j] =
-            u32::from(ok && (out.c[0][j] != 0.0 || out.c[1][j] != 0.0 || out.c[2][j] != 0.0));
     }
 }
 
@@ -191,9 +136,11 @@ fn segment_lanes(
 
 /// Shades the group of up to [`LANES`] rays starting at queue index `first`: each ray's
 /// direct light into `out`, its shadow rays appended to `shadows`, exactly as
-/// `shade_ray` with `LambertianModel` and nothing observed.
+/// `shade_ray` with `model` and nothing observed.
+#[allow(clippy::too_many_arguments)] // The group, its outputs, the model and the scratch.
 fn shade_group(
     cx: &ShadeContext,
+    model: LaneModel,
     first: usize,
     rays: &[QueuedRay],
     hits: &[Option<Surface>],
@@ -222,6 +169,14 @@ fn shade_group(
             lanes.kd[a][j] = kd[a];
             lanes.w[a][j] = w[a];
         }
+        if model != LaneModel::Lambertian {
+            let v = -q.ray.dir.normalize();
+            for a in 0..3 {
+                lanes.v[a][j] = v[a];
+                lanes.ks[a][j] = m.ks[a];
+            }
+            lanes.shininess[j] = m.shininess;
+        }
         points[j] = Some(at[j]);
     }
     let lights = cx.lights;
@@ -241,7 +196,12 @@ fn shade_group(
         if samples.len() == count {
             samples.push(SampleLanes::default());
         }
-        shade_sample(lanes, position, color, &mut samples[count]);
+        let sample = &mut samples[count];
+        match model {
+            LaneModel::Lambertian => shade_sample(lanes, position, color, sample),
+            LaneModel::Phong => phong_sample(lanes, position, color, sample),
+            LaneModel::BlinnPhong => blinn_phong_sample(lanes, position, color, sample),
+        }
         count += 1;
     };
     let mut position = Lanes3::default();
@@ -311,11 +271,12 @@ fn shade_group(
     }
 }
 
-/// `shade_chunks` of a render with the Lambertian model: chunk by chunk in parallel,
+/// `shade_chunks` of a render with `model`: chunk by chunk in parallel,
 /// [`LANES`] rays at a time within a chunk, into `radiance` and `shadow_rays` (the last
 /// depth's buffers, refilled).
 pub(super) fn shade_chunks_in_lanes(
     cx: &ShadeContext,
+    model: LaneModel,
     rays: &[QueuedRay],
     hits: &[Option<Surface>],
     radiance: &mut Vec<Vec3>,
@@ -336,7 +297,7 @@ pub(super) fn shade_chunks_in_lanes(
                 .zip(out.chunks_mut(LANES));
             for (g, ((rays, hits), out)) in groups.enumerate() {
                 let first = c * CHUNK + g * LANES;
-                shade_group(cx, first, rays, hits, out, shadows, &mut scratch);
+                shade_group(cx, model, first, rays, hits, out, shadows, &mut scratch);
             }
         });
 }
@@ -349,7 +310,6 @@ mod tests {
     use crate::sampling::Sampler;
     use crate::scene::{ParallelogramLight, PointLight, SamplerKind, SegmentLight, Settings};
     use crate::shade::Shading;
-    use crate::shade::models::LambertianModel;
     use crate::trace::lights::Lights;
     use crate::trace::materials::{MaterialData, Materials};
     use crate::trace::wavefront::{PassRegion, ShadowOrigin, shade_chunks};
@@ -401,7 +361,7 @@ mod tests {
                     ng: r.vec3(1.0).normalize(),
                     n: r.vec3(1.0).normalize(),
                     uv: Vec2::ZERO,
-                    material: (i % 3) as u32,
+                    material: (i % 5) as u32,
                 })
             })
             .collect();
@@ -439,20 +399,24 @@ mod tests {
         }
     }
 
+    /// Materials without a highlight (`ks = 0`, no `powf`), with one, with a huge `kd`,
+    /// with a negative `ks` and NaN shininess, and with shininess 0.
     fn materials() -> Materials {
-        let material = |kd: Vec3| MaterialData {
+        let material = |kd: Vec3, ks: Vec3, shininess: f32| MaterialData {
             kd,
-            ks: Vec3::ZERO,
-            shininess: 1.0,
+            ks,
+            shininess,
             alpha: 1.0,
             texture: None,
             wrap: Default::default(),
         };
         Materials {
             list: vec![
-                material(Vec3::new(0.75, 0.1, 0.1)),
-                material(Vec3::splat(0.5)),
-                material(Vec3::new(3e38, 0.2, 0.0)),
+                material(Vec3::new(0.75, 0.1, 0.1), Vec3::ZERO, 1.0),
+                material(Vec3::splat(0.5), Vec3::splat(0.3), 16.0),
+                material(Vec3::new(3e38, 0.2, 0.0), Vec3::new(0.0, 0.9, 0.1), 4.0),
+                material(Vec3::splat(0.2), Vec3::new(-0.5, 0.0, 0.7), f32::NAN),
+                material(Vec3::splat(0.6), Vec3::new(0.0, 0.4, 0.0), 0.0),
             ],
             ..Default::default()
         }
@@ -534,6 +498,18 @@ mod tests {
 
     #[test]
     fn lanes_give_the_scalar_loops_radiance_and_shadow_rays() {
+        use crate::scene::ShadingModel;
+        for model in [
+            ShadingModel::Lambertian,
+            ShadingModel::Phong,
+            ShadingModel::BlinnPhong,
+        ] {
+            lanes_give_the_scalar_loops_values(model);
+        }
+    }
+
+    /// `shade_chunks_in_lanes` against `shade_chunks` with `model`, every bit.
+    fn lanes_give_the_scalar_loops_values(model: crate::scene::ShadingModel) {
         let materials = materials();
         let mut compared = 0;
         for (count, seed) in [(1, 1), (7, 2), (8, 3), (13, 4), (2 * CHUNK + 21, 5)] {
@@ -564,7 +540,7 @@ mod tests {
                             settings: &settings,
                             shading: Shading {
                                 enabled: true,
-                                model: crate::scene::ShadingModel::Lambertian,
+                                model,
                                 gradient: &settings.gradient,
                                 comparison_gradient: &settings.comparison_gradient,
                             },
@@ -576,13 +552,15 @@ mod tests {
                             queue_shadows,
                         };
                         let (mut r0, mut s0) = (Vec::new(), ShadowQueue::default());
-                        shade_chunks::<(), _>(&cx, LambertianModel, &rays, &hits, &mut r0, &mut s0);
+                        // The scalar loop with the model read per sample.
+                        shade_chunks::<(), _>(&cx, cx.shading, &rays, &hits, &mut r0, &mut s0);
                         let (mut r1, mut s1) = (Vec::new(), ShadowQueue::default());
-                        shade_chunks_in_lanes(&cx, &rays, &hits, &mut r1, &mut s1);
+                        let lane_model = LaneModel::of(&cx.shading).unwrap();
+                        shade_chunks_in_lanes(&cx, lane_model, &rays, &hits, &mut r1, &mut s1);
                         assert_eq!(
                             bits(&r1, &s1),
                             bits(&r0, &s0),
-                            "{count} rays, lights {points}/{segments}/{parallelograms}, \
+                            "{model:?}, {count} rays, lights {points}/{segments}/{parallelograms}, \
                              {kind:?}, {shadow_samples} samples, queue {queue_shadows}"
                         );
                         compared += s0.len();

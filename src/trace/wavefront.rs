@@ -15,12 +15,12 @@ use super::lights::{LightSample, Lights};
 use super::log::{HitObserver, LightObserver, RayTrace, TraceLog};
 use super::materials::Materials;
 use super::plan::RenderPlan;
-use super::shade_lanes::shade_chunks_in_lanes;
+use super::shade_lanes::{LaneModel, shade_chunks_in_lanes};
 pub use super::shadow::{CHUNK, ShadowQueue, ShadowRay};
 use super::surface::{SHADOW_EPSILON, Surface, offset_ray_origin_towards, surface_at};
 use crate::accel::Ray;
 use crate::sampling::Sampler;
-use crate::scene::{Settings, ShadingModel};
+use crate::scene::Settings;
 use crate::shade::{Model, Shading, ShadingInput, WithModel};
 use crate::stats::{RenderStats, Stage};
 use crate::trace::geometry::SceneGeometry;
@@ -421,13 +421,13 @@ pub fn shade_hits(
     let wf = &mut *wf;
     let (rays, hits) = (&wf.rays, &wf.hits);
     let (radiance, shadows) = (&mut wf.ray_radiance, &mut wf.shadow_rays);
-    match log {
-        // Lambertian, the render benchmark's model: hits in lanes.
-        None if cx.shading.enabled && cx.shading.model == ShadingModel::Lambertian => {
-            shade_chunks_in_lanes(&cx, rays, hits, radiance, shadows);
+    match (log, LaneModel::of(&cx.shading)) {
+        // Lambertian (the render benchmark's model), Phong and Blinn-Phong: hits in lanes.
+        (None, Some(model)) => {
+            shade_chunks_in_lanes(&cx, model, rays, hits, radiance, shadows);
         }
         // The other models' loop reads the model per sample (see `Shading::dispatch`).
-        None => cx.shading.dispatch(ShadeRun {
+        (None, None) => cx.shading.dispatch(ShadeRun {
             cx: &cx,
             rays,
             hits,
@@ -435,7 +435,7 @@ pub fn shade_hits(
             shadows,
         }),
         // The debug's reads the model per sample (one copy of the loop).
-        Some(mut log) => {
+        (Some(mut log), _) => {
             log.light_samples = shade_chunks(&cx, cx.shading, rays, hits, radiance, shadows);
         }
     }
