@@ -403,18 +403,24 @@ impl SceneGeometry {
         let found = self
             .tri_wide
             .closest_packet(rays, &[t_max; PACKET][..rays.len()]);
-        let beyond = !self.instanced.is_empty() || !self.sphere_bvh.nodes.is_empty();
-        for ((ray, hit), found) in rays.iter().zip(hits).zip(found) {
-            let best = found.map(|(prim, lane, h)| Hit {
+        let best = |found: Option<(u32, u32, TriangleHit)>| {
+            found.map(|(prim, lane, h)| Hit {
                 lane,
                 ..triangle_hit(prim, &h)
-            });
-            *hit = if beyond {
+            })
+        };
+        // Two loops, the test made once: the triangles-only one neither reads the rays nor
+        // branches per ray.
+        if !self.instanced.is_empty() || !self.sphere_bvh.nodes.is_empty() {
+            for ((ray, hit), found) in rays.iter().zip(hits).zip(found) {
+                let best = best(found);
                 let t = best.map_or(t_max, |h| h.t);
-                self.intersect_beyond_triangles(ray, best, t, &mut ())
-            } else {
-                best
-            };
+                *hit = self.intersect_beyond_triangles(ray, best, t, &mut ());
+            }
+        } else {
+            for (hit, found) in hits.iter_mut().zip(found) {
+                *hit = best(found);
+            }
         }
     }
 
