@@ -154,6 +154,10 @@ impl WideBvh {
         // nearest interior child (any-hit: its last, which would be popped first).
         let mut next = Some((0, 0.0));
         let boxes = RayBoxes::new(ray);
+        // Lane indices below are taken `% WIDTH` (a no-op: masks have WIDTH bits) so
+        // that the compiler drops the bounds checks on the node's lane arrays: 1,528 /
+        // 1,914 -> 1,515 / 1,898 instructions per primary / incoherent ray (torus 100k).
+        // The same in `queue_nearest_first` cost 1,542 / 1,938 (code layout), so not there.
         loop {
             // Nodes until one meets leaves: only box tests and the stack in this inner
             // loop, so that the per-ray constants of the box test can stay in registers
@@ -181,7 +185,7 @@ impl WideBvh {
                     // leaves are tested below before either.
                     let mut inner = inner;
                     while inner != 0 {
-                        let lane = inner.trailing_zeros() as usize;
+                        let lane = inner.trailing_zeros() as usize % WIDTH;
                         inner &= inner - 1;
                         let entry = (node.child[lane], t[lane]);
                         if inner == 0 {
@@ -197,7 +201,7 @@ impl WideBvh {
             };
             if !NEAREST_FIRST {
                 while leaves != 0 {
-                    let lane = leaves.trailing_zeros() as usize;
+                    let lane = leaves.trailing_zeros() as usize % WIDTH;
                     leaves &= leaves - 1;
                     let (child, count) = (node.child[lane], node.count[lane]);
                     if visitor.leaf(child as usize, count, t_max) {
@@ -216,12 +220,12 @@ impl WideBvh {
                     while rest != 0 {
                         let lane = rest.trailing_zeros();
                         rest &= rest - 1;
-                        best = best.min(key(t[lane as usize], lane));
+                        best = best.min(key(t[lane as usize % WIDTH], lane));
                     }
                     best as u32
                 };
                 leaves &= !(1 << lane);
-                let lane = lane as usize;
+                let lane = lane as usize % WIDTH;
                 let (child, count) = (node.child[lane], node.count[lane]);
                 if t[lane] <= *t_max * BOX_MARGIN && visitor.leaf(child as usize, count, t_max) {
                     return true;
