@@ -1,8 +1,9 @@
 //! The render's shading with hits in lanes (Lambertian, Phong, Blinn-Phong): [`LANES`]
 //! hits at a time, their positions, normals and weights side by side (SoA), each light
 //! sample made for all of them at once, per light kind, and `l = normalize(sample - p)`
-//! and the model (`lane_models.rs`) done as `[f32; LANES]` loops (which the AVX2 clone turns into ymm code). The scalar loop in
-//! `wavefront.rs` handled every light and sampler kind per sample, one hit at a time.
+//! and the model (`lane_models.rs`) done as `[f32; LANES]` loops (which the AVX2 clone
+//! turns into ymm code). The scalar loop in `wavefront.rs` handled every light and
+//! sampler kind per sample, one hit at a time.
 //!
 //! Same values bit for bit: every lane does the scalar code's f32 operations in the
 //! same order (Rust never contracts them into FMAs), and the shadow rays are written in
