@@ -339,49 +339,47 @@ impl Sheared {
     }
 }
 
-/// The prefilter's answer for one group: the lanes the scalar test may accept, and
-/// the scalar test's own intermediate values on each lane, bit for bit.
-pub struct Candidates {
+/// The prefilter's answer for one triangle test over `N` lanes (a group's triangles
+/// against one ray, or one triangle against a packet's rays): the lanes the scalar
+/// test may accept, and the scalar test's own intermediate values on each lane, bit
+/// for bit.
+pub struct LaneValues<const N: usize> {
     /// Lanes the scalar test may accept.
     pub mask: u32,
     /// Lanes with an edge function exactly zero, which the scalar test redoes in f64.
-    zero: u32,
+    pub(super) zero: u32,
     /// The edge functions u, v, w.
-    e: [[f32; LANES]; 3],
-    det: [f32; LANES],
-    t_scaled: [f32; LANES],
+    pub(super) e: [[f32; N]; 3],
+    pub(super) det: [f32; N],
+    pub(super) t_scaled: [f32; N],
     /// [`Sheared::sizes`] of each lane.
-    sizes: [[f32; LANES]; 3],
+    pub(super) sizes: [[f32; N]; 3],
 }
 
-impl Candidates {
-    /// The scalar test, [`super::intersect_triangle_sheared`], on lane `lane` (in
-    /// `mask`) of group `g`, with a bound `t_max` at most the prefilter's;
-    /// `may_be_degenerate` false vouches that the lane's triangle is not degenerate
-    /// ([`DEGENERATE`]). From the lane's values when they decide it: no zero edge
-    /// function (so the signs, det and the sign of t_scaled passed as in the scalar
-    /// test) and a t far enough from 0 that the scalar test's error bound on t cannot
-    /// send it to its f64 recheck (see `clear_of_zero`); else the scalar test itself.
-    /// `wide_packet`'s `PacketCandidates::hit` is its twin with rays in the lanes' place:
-    /// change both (one function shared by the two cost the Cornell render 8
-    /// instructions per ray, and the single rays' primary set 10).
+/// The prefilter's answer for one group against one ray.
+pub type Candidates = LaneValues<LANES>;
+
+impl<const N: usize> LaneValues<N> {
+    /// The scalar test's answer on lane `i` (in `mask`), with a bound `t_max` at most
+    /// the prefilter's; `may_be_degenerate` false vouches that the lane's triangle
+    /// (`triangle()`) is not degenerate ([`DEGENERATE`]). From the lane's values when
+    /// they decide it: no zero edge function (so the signs, det and the sign of
+    /// t_scaled passed as in the scalar test) and a t far enough from 0 that the scalar
+    /// test's error bound on t cannot send it to its f64 recheck (see `clear_of_zero`);
+    /// else `scalar()`, the scalar test itself.
     #[inline(always)]
-    pub fn hit(
+    pub(super) fn decide(
         &self,
-        lane: usize,
-        g: &TriGroup,
-        may_be_degenerate: bool,
-        shear: &RayShear,
-        origin: Vec3,
+        i: usize,
         t_max: f32,
+        may_be_degenerate: bool,
+        triangle: impl FnOnce() -> [Vec3; 3],
+        scalar: impl FnOnce() -> Option<TriangleHit>,
     ) -> Option<TriangleHit> {
-        // The vertices are read only where they are needed: the scalar test, and the
-        // exact degenerate test in leaves that hold a degenerate triangle.
-        let scalar = || scalar_lane(g, lane, shear, origin, t_max, may_be_degenerate);
-        if self.zero & (1 << lane) != 0 {
+        if self.zero & (1 << i) != 0 {
             return scalar();
         }
-        let (det, t_scaled) = (self.det[lane], self.t_scaled[lane]);
+        let (det, t_scaled) = (self.det[i], self.t_scaled[i]);
         // The scalar test's remaining checks, in its order, against the current bound.
         let beyond = if det < 0.0 {
             t_scaled <= t_max * det
@@ -392,7 +390,7 @@ impl Candidates {
             return None;
         }
         if may_be_degenerate {
-            let [a, b, c] = g.triangle(lane);
+            let [a, b, c] = triangle();
             if is_degenerate(a, b, c) {
                 return None;
             }
@@ -402,16 +400,44 @@ impl Candidates {
         if !(t > 0.0 && t < t_max) {
             return None;
         }
-        if !clear_of_zero(t, det, self.sizes.map(|s| s[lane])) {
+        // Lane `i` of each array, not a copy of the arrays.
+        let [pz, xy, z] = &self.sizes;
+        if !clear_of_zero(t, det, [pz[i], xy[i], z[i]]) {
             return scalar();
         }
-        let [u, v, w] = self.e.map(|e| e[lane]);
+        let [u, v, w] = [self.e[0][i], self.e[1][i], self.e[2][i]];
         Some(TriangleHit {
             t,
             b0: u * inv_det,
             b1: v * inv_det,
             b2: w * inv_det,
         })
+    }
+}
+
+impl Candidates {
+    /// The scalar test, [`super::intersect_triangle_sheared`], on lane `lane` (in
+    /// `mask`) of group `g`, with a bound `t_max` at most the prefilter's: see
+    /// [`LaneValues::decide`]. The vertices are read only where they are needed: the
+    /// scalar test, and the exact degenerate test in leaves that hold a degenerate
+    /// triangle.
+    #[inline(always)]
+    pub fn hit(
+        &self,
+        lane: usize,
+        g: &TriGroup,
+        may_be_degenerate: bool,
+        shear: &RayShear,
+        origin: Vec3,
+        t_max: f32,
+    ) -> Option<TriangleHit> {
+        self.decide(
+            lane,
+            t_max,
+            may_be_degenerate,
+            || g.triangle(lane),
+            || scalar_lane(g, lane, shear, origin, t_max, may_be_degenerate),
+        )
     }
 }
 

@@ -25,8 +25,8 @@ use glam::Vec3;
 use wide::u32x8;
 
 use super::bvh::MAX_DEPTH;
-use super::leaf::{LANES, TriGroup, clear_of_zero, groups_for, leaf_count};
-use super::triangle::{RayShear, TriangleHit, intersect_triangle_flagged, is_degenerate};
+use super::leaf::{LANES, LaneValues, TriGroup, groups_for, leaf_count};
+use super::triangle::{RayShear, TriangleHit, intersect_triangle_flagged};
 use super::wide_node::{EMPTY, WIDTH, WideNode, leaf_lanes};
 use super::wide_query::three_ulps_up;
 use super::{BOX_MARGIN, Ray, WideBvh};
@@ -401,23 +401,11 @@ impl PacketRays {
 
 /// The packet prefilter's answer for one triangle: `leaf::Candidates` with rays in
 /// the lanes' place.
-struct PacketCandidates {
-    /// Rays the scalar test may accept.
-    mask: u32,
-    /// Rays with an edge function exactly zero, which the scalar test redoes in f64.
-    zero: u32,
-    /// The edge functions u, v, w.
-    e: [Lanes; 3],
-    det: Lanes,
-    t_scaled: Lanes,
-    /// `Sheared::sizes` of each ray.
-    sizes: [Lanes; 3],
-}
+type PacketCandidates = LaneValues<PACKET>;
 
 impl PacketCandidates {
     /// The scalar test on ray `r` (in `mask`) and triangle `tri` with a bound `t_max`
-    /// at most the prefilter's: `Candidates::hit` with the ray in the lane's place (the
-    /// ray's values where they decide it, else the scalar test itself).
+    /// at most the prefilter's: [`LaneValues::decide`] with the ray in the lane's place.
     #[inline(always)]
     fn hit(
         &self,
@@ -428,39 +416,13 @@ impl PacketCandidates {
         origin: Vec3,
         t_max: f32,
     ) -> Option<TriangleHit> {
-        let scalar = || intersect_triangle_flagged(shear, origin, tri, t_max, may_be_degenerate);
-        if self.zero & (1 << r) != 0 {
-            return scalar();
-        }
-        let (det, t_scaled) = (self.det[r], self.t_scaled[r]);
-        let beyond = if det < 0.0 {
-            t_scaled <= t_max * det
-        } else {
-            t_scaled >= t_max * det
-        };
-        if beyond {
-            return None;
-        }
-        if may_be_degenerate && is_degenerate(tri[0], tri[1], tri[2]) {
-            return None;
-        }
-        let inv_det = 1.0 / det;
-        let t = t_scaled * inv_det;
-        if !(t > 0.0 && t < t_max) {
-            return None;
-        }
-        // Lane `r` of each array, not a copy of the arrays (`map` copied them all).
-        let [pz, xy, z] = &self.sizes;
-        if !clear_of_zero(t, det, [pz[r], xy[r], z[r]]) {
-            return scalar();
-        }
-        let [u, v, w] = [self.e[0][r], self.e[1][r], self.e[2][r]];
-        Some(TriangleHit {
-            t,
-            b0: u * inv_det,
-            b1: v * inv_det,
-            b2: w * inv_det,
-        })
+        self.decide(
+            r,
+            t_max,
+            may_be_degenerate,
+            || tri,
+            || intersect_triangle_flagged(shear, origin, tri, t_max, may_be_degenerate),
+        )
     }
 }
 
