@@ -99,7 +99,8 @@ impl Sampler {
             SamplerKind::Independent | SamplerKind::Stratified => {
                 let mut prefix = [0; SLOT_LANES];
                 prefixes(self.seed_hash, pixels, sample, &mut prefix);
-                units2(&prefix, &[DIM_PIXEL; SLOT_LANES], 0, u, v);
+                units(&prefix, &[DIM_PIXEL; SLOT_LANES], 0, u);
+                units(&prefix, &[DIM_PIXEL; SLOT_LANES], 1, v);
             }
         }
     }
@@ -382,7 +383,8 @@ impl SlotLanes {
     /// Sample `k` of each lane's slot, 2D ([`SlotSampler::light2`]).
     pub fn light2(&self, k: u32, u: &mut [f32; SLOT_LANES], v: &mut [f32; SLOT_LANES]) {
         if self.packed && k < 1 << LIGHT_SAMPLE_BITS {
-            units2(&self.prefix, &self.first, 2 * k, u, v);
+            units(&self.prefix, &self.first, 2 * k, u);
+            units(&self.prefix, &self.first, 2 * k + 1, v);
         } else {
             for ((u, v), s) in u.iter_mut().zip(v.iter_mut()).zip(&self.slots) {
                 let uv = s.map_or(Vec2::ZERO, |s| s.light2(k));
@@ -397,21 +399,6 @@ impl SlotLanes {
 fn prefixes(seed_hash: u64, pixels: &[u32; SLOT_LANES], sample: u32, out: &mut [u64; SLOT_LANES]) {
     for (o, &pixel) in out.iter_mut().zip(pixels) {
         *o = mix64(seed_hash ^ ((u64::from(pixel) << 32) | u64::from(sample)));
-    }
-}
-
-/// [`units`] of dimensions `first + add` into `u` and `first + add + 1` into `v`.
-#[multiversion(targets("x86_64+avx2+fma", "x86_64+sse4.2"))]
-fn units2(
-    prefix: &[u64; SLOT_LANES],
-    first: &[u32; SLOT_LANES],
-    add: u32,
-    u: &mut [f32; SLOT_LANES],
-    v: &mut [f32; SLOT_LANES],
-) {
-    for j in 0..SLOT_LANES {
-        u[j] = unit_from_hash(mix64(prefix[j] ^ u64::from(first[j] + add)));
-        v[j] = unit_from_hash(mix64(prefix[j] ^ u64::from(first[j] + add + 1)));
     }
 }
 
