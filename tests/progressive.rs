@@ -67,9 +67,11 @@ fn interrupt_between_passes_keeps_whole_passes() {
 
 #[test]
 fn interrupt_between_regions_finishes_the_region_in_flight() {
-    // 260x260 pixels is two regions (65536 + 32064 pixels).
+    // A square just over one region: two regions (REGION_PIXELS + the rest).
+    let side = (glint::schedule::REGION_PIXELS as f64).sqrt() as u32 + 2;
+    assert!(side * side < 2 * glint::schedule::REGION_PIXELS);
     let mut r = load(&scene(
-        260,
+        side,
         "pixel_samples: 8, pixel_sampling: uniform, shadow_samples: 1",
     ));
     let flag = Arc::new(AtomicBool::new(false));
