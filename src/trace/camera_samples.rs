@@ -144,6 +144,65 @@ pub fn generate_camera_samples(
 mod tests {
     use super::*;
     use crate::scene::SamplerKind;
+    use bevy_ecs::system::RunSystemOnce;
+
+    #[test]
+    fn camera_rays_are_each_pixels_scalar_ray_across_splits() {
+        let camera = Camera {
+            position: Vec3::new(0.0, 1.0, 3.9),
+            look_at: Vec3::new(0.1, 0.9, 0.0),
+            up: Vec3::Y,
+            fov_y_degrees: 40.0,
+            width: 97,
+            height: 61,
+        };
+        let settings = Settings {
+            pixel_samples: 4,
+            pixel_sampling: PixelSampling::Uniform,
+            seed: 5,
+            ..Settings::default()
+        };
+        let plan = RenderPlan {
+            pixel_patterns: true,
+            ..RenderPlan::default()
+        };
+        // 2,100 rays from pixel 13: split in two halves of 1,050 (not a multiple of
+        // SLOT_LANES) by a pool of several threads, so a split starts mid-group.
+        let region = PassRegion {
+            sample: 2,
+            first_pixel: 13,
+            pixels: 2100,
+        };
+        let mut world = World::new();
+        world.insert_resource(settings.clone());
+        world.insert_resource(plan.clone());
+        world.insert_resource(region);
+        world.insert_resource(Wavefront::default());
+        world.insert_resource(SampleRadiance::default());
+        world.insert_resource(RenderStats::default());
+        world.spawn(camera.clone());
+        let pool = rayon::ThreadPoolBuilder::new()
+            .num_threads(4)
+            .build()
+            .unwrap();
+        pool.install(|| world.run_system_once(generate_camera_samples))
+            .expect("the system runs");
+        let basis = CameraBasis::new(&camera);
+        let offsets = CameraSampleOffsets::new(&settings, &plan);
+        let rays = &world.resource::<Wavefront>().rays;
+        assert_eq!(rays.len(), 2100);
+        for (i, q) in rays.iter().enumerate() {
+            let pixel = 13 + i as u32;
+            let o = offsets.of(pixel, 2);
+            let want = basis.ray((pixel % 97) as f32 + o.x, (pixel / 97) as f32 + o.y);
+            assert_eq!(
+                q.ray.dir.to_array().map(f32::to_bits),
+                want.dir.to_array().map(f32::to_bits)
+            );
+            assert_eq!(q.ray.origin, want.origin);
+            assert_eq!((q.weight, q.slot, q.path), (Vec3::ONE, i as u32, 0));
+        }
+    }
 
     #[test]
     fn offsets_and_directions_in_lanes_are_the_scalar_ones() {
