@@ -14,4 +14,5 @@ pub mod plan;
 mod shade_lanes;
 pub mod shadow;
 pub mod surface;
+mod surface_lanes;
 pub mod wavefront;

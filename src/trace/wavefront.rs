@@ -18,6 +18,7 @@ use super::plan::RenderPlan;
 use super::shade_lanes::{LaneModel, shade_chunks_in_lanes};
 pub use super::shadow::{CHUNK, ShadowQueue, ShadowRay};
 use super::surface::{SHADOW_EPSILON, Surface, offset_ray_origin_towards, surface_at};
+use super::surface_lanes::surfaces_at;
 use crate::accel::Ray;
 use crate::sampling::Sampler;
 use crate::scene::Settings;
@@ -187,9 +188,7 @@ fn closest_hits_in_packets(
             let mut hits = [None; PACKET];
             let n = rays.len();
             geometry.intersect_packet(&packet[..n], f32::INFINITY, &mut hits[..n]);
-            for ((s, q), hit) in surfaces.iter_mut().zip(rays).zip(hits) {
-                *s = hit.map(|h| surface_at(geometry, &q.ray, &h, interpolate));
-            }
+            surfaces_at(geometry, &packet[..n], &hits[..n], interpolate, surfaces);
         });
 }
 
