@@ -471,9 +471,10 @@ fn closest_hits_lead_to_their_triangles_vertices() {
     }
 }
 
-/// The collapse as first written (a `Vec` of children per node, `insert`), which the
-/// allocation-free one must match node for node.
-fn reference_collapse(bvh: &Bvh, b: usize, out: &mut Vec<WideNode>) -> u32 {
+/// The collapse before the costed one: each node takes the largest-area interior
+/// children in place of their parents until it has `WIDTH`; leaves are the binary
+/// tree's. Leaf lanes hold their binary `(slot, count)`.
+fn greedy_collapse(bvh: &Bvh, b: usize, out: &mut Vec<WideNode>) -> u32 {
     let me = out.len();
     out.push(WideNode::UNUSED);
     let first = &bvh.nodes[b];
@@ -497,72 +498,82 @@ fn reference_collapse(bvh: &Bvh, b: usize, out: &mut Vec<WideNode>) -> u32 {
         kids.insert(k + 1, bvh.nodes[open].offset as usize);
     }
     for (lane, &k) in kids.iter().enumerate() {
-        if !out[me].set_lane(lane, &bvh.nodes[k]) {
-            out[me].child[lane] = reference_collapse(bvh, k, out);
-        }
+        let node = &bvh.nodes[k];
+        out[me].set_child_bounds(lane, node.bounds());
+        out[me].child[lane] = if node.is_leaf() {
+            out[me].count[lane] = node.count;
+            node.offset
+        } else {
+            greedy_collapse(bvh, k, out)
+        };
     }
     me as u32
 }
 
+/// The collapse's cost of `nodes` (leaf lanes holding their triangle count) under a
+/// root of area `root`, summed lane by lane: `NODE_COST` times the area of each node,
+/// `leaf_cost` of each leaf.
+fn tree_cost(nodes: &[WideNode], root: f32) -> f64 {
+    use crate::accel::wide_collapse::{NODE_COST, leaf_cost};
+    let mut cost = (NODE_COST * root) as f64;
+    for node in nodes {
+        for lane in 0..WIDTH {
+            let area = node.child_bounds(lane).surface_area();
+            match (node.child[lane], node.count[lane]) {
+                (EMPTY, _) => {}
+                (_, 0) => cost += (NODE_COST * area) as f64,
+                (_, count) => cost += leaf_cost(area, count) as f64,
+            }
+        }
+    }
+    cost
+}
+
+fn costed_collapse(bvh: &Bvh) -> Vec<WideNode> {
+    let mut nodes = Vec::new();
+    crate::accel::wide_collapse::collapse(bvh, &mut nodes, &mut |slot, count| (slot, count));
+    nodes
+}
+
 #[test]
-fn the_collapse_opens_the_same_children_as_the_reference() {
-    for (tris, split) in [
-        (random_tris(1, 12), SplitMethod::SahBinned),
-        (random_tris(3000, 13), SplitMethod::SahBinned),
-        (random_tris(3000, 14), SplitMethod::Median),
-        (grid(24), SplitMethod::SahBinned),
-        (grid(16), SplitMethod::Median),
+fn the_collapse_costs_less_than_the_greedy_one_in_fewer_nodes() {
+    // The costed collapse chooses among all trees the greedy one could make (and
+    // more), so it never costs more; the greedy one left its lower nodes half empty.
+    // The SAH grid's leaves fill its nodes already: no gain there.
+    for (tris, split, gain) in [
+        (random_tris(3000, 13), SplitMethod::SahBinned, true),
+        (random_tris(3000, 14), SplitMethod::Median, true),
+        (grid(24), SplitMethod::SahBinned, false),
+        (grid(16), SplitMethod::Median, true),
     ] {
         let bounds: Vec<Aabb> = tris.iter().map(|t| Aabb::from_points(t)).collect();
         let bvh = Bvh::build(&bounds, split);
-        let (mut got, mut expect) = (Vec::new(), Vec::new());
-        super::collapse_node(&bvh, 0, 0, &mut got, &mut |slot, count| (slot, count));
-        reference_collapse(&bvh, 0, &mut expect);
-        assert_eq!(got, expect);
-    }
-    // Every box the same: each opening is a tie among several, which goes to the last,
-    // and a leaf beside the root's subtree leaves room to open only some of them.
-    fn full(depth: u32, nodes: &mut Vec<BvhNode>, prims: &mut u32) {
-        let unit = Aabb {
-            min: Vec3::ZERO,
-            max: Vec3::ONE,
-        };
-        let me = nodes.len();
-        nodes.push(BvhNode::leaf(unit, *prims, 1));
-        if depth == 0 {
-            *prims += 1;
-            return;
+        let costed = costed_collapse(&bvh);
+        let mut greedy = Vec::new();
+        greedy_collapse(&bvh, 0, &mut greedy);
+        let root = bvh.nodes[0].bounds().surface_area();
+        let (c, g) = (tree_cost(&costed, root), tree_cost(&greedy, root));
+        assert!(c <= g * (1.0 + 1e-5), "{c} > {g}");
+        if gain {
+            assert!(c < 0.95 * g, "{c} for {g}: no gain");
+            let (c, g) = (costed.len(), greedy.len());
+            assert!(2 * c < g, "{c} nodes for {g}");
         }
-        nodes[me].count = 0;
-        full(depth - 1, nodes, prims);
-        nodes[me].offset = nodes.len() as u32;
-        full(depth - 1, nodes, prims);
+        // The tree built is the one whose cost the collapse found least (summed in
+        // another order).
+        let least = crate::accel::wide_collapse::least_cost(&bvh) as f64;
+        assert!(
+            (c - least).abs() <= 1e-5 * least,
+            "{c} built, {least} found"
+        );
     }
-    let mut bvh = Bvh::default();
-    let mut prims = 0;
-    full(5, &mut bvh.nodes, &mut prims);
-    // The root's first child becomes a leaf: cut its subtree out.
-    let (first, second) = (1, bvh.nodes[0].offset as usize);
-    bvh.nodes.drain(first + 1..second);
-    bvh.nodes[0].offset = first as u32 + 1;
-    bvh.nodes[first].count = 1;
-    for node in &mut bvh.nodes[first + 1..] {
-        if !node.is_leaf() {
-            node.offset -= (second - first - 1) as u32;
-        }
-    }
-    let (mut got, mut expect) = (Vec::new(), Vec::new());
-    super::collapse_node(&bvh, 0, 0, &mut got, &mut |slot, count| (slot, count));
-    reference_collapse(&bvh, 0, &mut expect);
-    assert_eq!(got, expect);
 }
 
 /// The leaf groups as `LeafTris::build` made them before the collapse grouped leaves as
 /// it met them: every leaf lane of the collapsed nodes (holding binary slots), sorted by
 /// slot, then grouped.
 fn reference_leaves(bvh: &Bvh, tris: &[Tri]) -> (Vec<WideNode>, LeafTris) {
-    let mut nodes = Vec::new();
-    super::collapse_node(bvh, 0, 0, &mut nodes, &mut |slot, count| (slot, count));
+    let mut nodes = costed_collapse(bvh);
     let mut lanes = Vec::new();
     for (i, node) in nodes.iter().enumerate() {
         for lane in 0..WIDTH {
@@ -654,4 +665,72 @@ fn degenerate_triangles_are_flagged_and_never_hit() {
         .unwrap();
     bad.nodes[i].count[l] |= DEGENERATE;
     assert!(bad.validate(&tris).is_err());
+}
+
+/// Wide leaf lanes of `wide` that hold more than one binary leaf of `bvh`.
+fn merged_leaves(bvh: &Bvh, wide: &WideBvh) -> usize {
+    let leaf_lanes = wide.nodes.iter().flat_map(|n| n.count).filter(|&c| c > 0);
+    bvh.leaf_count() - leaf_lanes.count()
+}
+
+#[test]
+fn merged_leaves_hold_their_triangles_and_answer_as_the_binary_tree() {
+    // Subtrees of a few triangles merged into one leaf, whose box must hold every one
+    // of them (validate), and whose answers are still the binary tree's.
+    for (tris, seed) in [(random_tris(3000, 21), 22), (random_tris(3000, 13), 23)] {
+        let (bvh, wide) = both(&tris, SplitMethod::SahBinned);
+        assert!(
+            merged_leaves(&bvh, &wide) >= 3,
+            "{}",
+            merged_leaves(&bvh, &wide)
+        );
+        wide.validate(&tris).unwrap();
+        for (ray, t_max) in rays(2000, seed) {
+            let expect = binary_closest(&bvh, &tris, &ray, t_max);
+            let got = wide.closest_hit(&ray, t_max).map(|(p, h)| (p, h.t));
+            assert_eq!(got, expect, "{ray:?}");
+            let any = wide.any_hit(&ray, t_max, |_, _| true);
+            assert_eq!(any, expect.is_some(), "{ray:?}");
+        }
+    }
+}
+
+#[test]
+fn sibling_leaves_that_fit_one_group_share_it() {
+    // Four triangles in one spot that the binary tree splits into leaves of 1 and 3,
+    // and four far away in one leaf: the first four become one leaf of one group (its
+    // box both leaves'), not two groups of which one holds three padding lanes.
+    let at = |x: f32| -> Tri {
+        [
+            vec3(x, 0.0, 0.0),
+            vec3(x + 1.0, 0.0, 0.0),
+            vec3(x, 1.0, 0.0),
+        ]
+    };
+    let tris: Vec<Tri> = [0.0, 0.01, 0.02, 0.03, 10.0, 10.01, 10.02, 10.03]
+        .into_iter()
+        .map(at)
+        .collect();
+    let bound = |r: std::ops::Range<usize>| {
+        let boxes = tris[r].iter().map(|t| Aabb::from_points(t));
+        boxes.reduce(Aabb::union).unwrap()
+    };
+    let bvh = Bvh {
+        nodes: vec![
+            BvhNode::interior(bound(0..8), 4),
+            BvhNode::interior(bound(0..4), 3),
+            BvhNode::leaf(bound(0..1), 0, 1),
+            BvhNode::leaf(bound(1..4), 1, 3),
+            BvhNode::leaf(bound(4..8), 4, 4),
+        ],
+        prim_indices: (0..8).collect(),
+    };
+    let wide = WideBvh::collapse(&bvh, &tris);
+    wide.validate(&tris).unwrap();
+    assert_eq!((wide.nodes.len(), wide.leaves.groups.len()), (1, 2));
+    let root = &wide.nodes[0];
+    assert_eq!(&root.count[..3], &[4, 4, 0]);
+    assert_eq!(root.child_bounds(0), bound(0..4));
+    assert_eq!(root.child_bounds(1), bound(4..8));
+    assert_eq!(wide.leaves.prims, (0..8).collect::<Vec<u32>>());
 }
