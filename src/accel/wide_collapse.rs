@@ -48,6 +48,39 @@ pub(super) fn leaf_cost(area: f32, count: u32) -> f32 {
     area * (LEAF_COST + GROUP_COST * groups_for(count as usize) as f32)
 }
 
+/// The least cost of an interior node as one lane, and whether that is a leaf (else a
+/// wide node of its own), from its box's area, its triangles and the least cost of its
+/// children in `WIDTH` lanes.
+fn single(area: f32, count: u32, children: f32) -> (f32, bool) {
+    let node = NODE_COST * area + children;
+    if count <= MAX_LEAF {
+        let leaf = leaf_cost(area, count);
+        if leaf <= node {
+            return (leaf, true);
+        }
+    }
+    (node, false)
+}
+
+/// The least cost of two children, of lane costs `left` and `right`, in at most `i`
+/// lanes together: entry `i - 1` (infinite for one lane). The same sums and minimum as
+/// `Costs::split`, all `i` at once and without branches: the collapse took 2.1 times
+/// the greedy one's instructions with a `split` per `i`, 1.6 times with this (torus
+/// 100k: 15.5 -> 24.9 million, about 1 ms more).
+#[inline(always)]
+fn splits(left: &[f32; WIDTH], right: &[f32; WIDTH]) -> [f32; WIDTH] {
+    let mut least = [f32::INFINITY; WIDTH];
+    // Left child in k lanes, right in the rest: a select per lane, no branch.
+    for k in 1..WIDTH {
+        let l = left[k - 1];
+        for (least, &r) in least[k..].iter_mut().zip(&right[..WIDTH - k]) {
+            let cost = l + r;
+            *least = if cost < *least { cost } else { *least };
+        }
+    }
+    least
+}
+
 impl Costs {
     /// The costs of every node of `bvh` (not empty), children before parents.
     fn new(bvh: &Bvh) -> Costs {
@@ -67,28 +100,22 @@ impl Costs {
             }
             let (left, right) = (b + 1, node.offset as usize);
             (c.first[b], c.count[b]) = (c.first[left], c.count[left] + c.count[right]);
-            let mut best = c.single(bvh, b).0;
+            let splits = splits(&c.cost[left], &c.cost[right]);
+            let area = node.bounds().surface_area();
+            let mut best = single(area, c.count[b], splits[WIDTH - 1]).0;
             c.cost[b][0] = best;
             for i in 2..=WIDTH {
-                best = best.min(c.split(bvh, b, i).0);
+                best = best.min(splits[i - 1]);
                 c.cost[b][i - 1] = best;
             }
         }
         c
     }
 
-    /// The least cost of interior node `b` as one lane, and whether that is a leaf
-    /// (else a wide node of its own).
+    /// [`single`] of interior node `b`.
     fn single(&self, bvh: &Bvh, b: usize) -> (f32, bool) {
         let area = bvh.nodes[b].bounds().surface_area();
-        let node = NODE_COST * area + self.split(bvh, b, WIDTH).0;
-        if self.count[b] <= MAX_LEAF {
-            let leaf = leaf_cost(area, self.count[b]);
-            if leaf <= node {
-                return (leaf, true);
-            }
-        }
-        (node, false)
+        single(area, self.count[b], self.split(bvh, b, WIDTH).0)
     }
 
     /// The least cost of interior node `b`'s two children in at most `i` (2 or more)
