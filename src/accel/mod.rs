@@ -10,6 +10,7 @@
 //! - [`bvh`] and [`build`]: a flat depth-first BVH with binned-SAH and median builders.
 //! - [`traverse`]: closest-hit and any-hit traversal of that BVH.
 //! - [`wide`]: that BVH collapsed to 8-wide nodes with triangles in leaf order, for the render.
+//! - `wide_collapse`: the choice of the wide nodes and leaves, by a surface-area cost.
 //! - `wide_query`: the wide BVH's closest-hit and any-hit queries, one clone per instruction set.
 //! - `wide_packet`: the queries for packets of up to eight rays, one ray per SIMD lane.
 //! - [`leaf`]: the wide BVH's leaf triangles in SIMD groups, with a vectorised prefilter.
@@ -26,6 +27,7 @@ pub mod sphere;
 pub mod traverse;
 pub mod triangle;
 pub mod wide;
+mod wide_collapse;
 pub mod wide_node;
 mod wide_packet;
 mod wide_query;

@@ -16,7 +16,8 @@
 
 use super::bvh::{Bvh, MAX_DEPTH};
 use super::leaf::{LANES, LeafTris, NO_PRIM, groups_for};
-use super::wide_node::{EMPTY, RayBoxes, collapse_node, leaf_lanes};
+use super::wide_collapse::collapse;
+use super::wide_node::{EMPTY, RayBoxes, leaf_lanes};
 pub use super::wide_node::{WIDTH, WideNode};
 use super::wide_query::LeafVisitor;
 use super::{Aabb, BOX_MARGIN, Ray};
@@ -39,11 +40,11 @@ pub struct WideBvh {
     pub depth: u32,
 }
 
-/// Wide nodes to reserve for a binary tree of `binary` nodes: the collapse makes 0.17
-/// per binary node on the procedural meshes (SAH leaves of 2 to 8 triangles), so a
-/// fifth leaves room without the 2.9 times too many that half of them reserved.
+/// Wide nodes to reserve for a binary tree of `binary` nodes: the collapse makes 0.10
+/// per binary node on the anchors' meshes (torus 100k: 5,008 for 52,185; Sponza 0.10,
+/// MetalRoughSpheres 0.09), so an eighth leaves room.
 fn wide_node_estimate(binary: usize) -> usize {
-    binary / 5 + 1
+    binary / 8 + 1
 }
 
 /// Traversal stack entries any tree needs: each of at most `MAX_DEPTH` levels below
@@ -63,8 +64,9 @@ fn key(t: f32, lane: u32) -> u64 {
 
 impl WideBvh {
     /// Collapses `bvh` (built over `positions`) into `WIDTH`-wide nodes, each taking the
-    /// largest-area interior grandchildren in place of their parents; leaves and
-    /// their triangle order are the binary tree's.
+    /// cut of its binary subtree of least surface-area cost, each leaf a binary subtree
+    /// of up to `wide_collapse::MAX_LEAF` triangles (see `wide_collapse`); the
+    /// triangles keep the binary tree's order.
     pub fn collapse(bvh: &Bvh, positions: &[[Vec3; 3]]) -> WideBvh {
         if bvh.nodes.is_empty() {
             return WideBvh::default();
@@ -77,10 +79,9 @@ impl WideBvh {
             .sum();
         let mut leaves = LeafTris::with_capacity(groups);
         let mut nodes = Vec::with_capacity(wide_node_estimate(bvh.nodes.len()));
-        let depth = collapse_node(bvh, 0, 0, &mut nodes, &mut |slot, count| {
+        let depth = collapse(bvh, &mut nodes, &mut |slot, count| {
             leaves.push_leaf(slot, count, &bvh.prim_indices, positions)
-        })
-        .1;
+        });
         nodes.shrink_to_fit();
         WideBvh {
             nodes,

@@ -1,11 +1,10 @@
 //! The 8-wide BVH's node format: [`WideNode`] (child boxes structure-of-arrays,
 //! so that one slab test covers all eight), the per-ray slab test over a node's
-//! children (`RayBoxes`), and the collapse of the binary tree into such nodes.
+//! children (`RayBoxes`). `wide_collapse` makes them from the binary tree.
 
 use glam::Vec3;
 use wide::u32x8;
 
-use super::bvh::{Bvh, BvhNode};
 use super::{Aabb, BOX_MARGIN, Ray};
 
 /// Children per node. Eight beat four on the 100k torus (callgrind: 9-10% fewer
@@ -57,16 +56,6 @@ impl WideNode {
             self.bounds[axis][lane] = a.min[axis];
             self.bounds[3 + axis][lane] = a.max[axis];
         }
-    }
-
-    /// Makes lane `lane` binary node `node`'s box and, if it is a leaf, its slots;
-    /// returns whether it is a leaf (else the caller sets `child`).
-    pub(super) fn set_lane(&mut self, lane: usize, node: &BvhNode) -> bool {
-        self.set_child_bounds(lane, node.bounds());
-        if node.is_leaf() {
-            (self.child[lane], self.count[lane]) = (node.offset, node.count);
-        }
-        node.is_leaf()
     }
 }
 
@@ -131,71 +120,4 @@ impl RayBoxes {
 #[inline(always)]
 pub(super) fn leaf_lanes(node: &WideNode) -> u32 {
     !u32x8::from(node.count).simd_eq(u32x8::ZERO).to_bitmask() & ((1 << WIDTH) - 1)
-}
-
-/// Appends the wide node for binary node `b` (and its subtree) at `depth`; returns its
-/// index and the deepest level in its subtree. Each binary leaf's `(offset, count)`
-/// becomes the lane's `(child, count)` through `leaf`, called in the leaves' depth-first
-/// order, which is their slot order. Allocates nothing but the nodes it appends.
-pub(super) fn collapse_node(
-    bvh: &Bvh,
-    b: usize,
-    depth: u32,
-    out: &mut Vec<WideNode>,
-    leaf: &mut impl FnMut(u32, u32) -> (u32, u32),
-) -> (u32, u32) {
-    let me = out.len();
-    out.push(WideNode::UNUSED);
-    // The children so far, in order, and the surface area of each interior one (None
-    // for a leaf), computed once per child rather than at every opening.
-    let mut kids = [0usize; WIDTH];
-    let mut areas: [Option<f32>; WIDTH] = [None; WIDTH];
-    let area = |k: usize| {
-        let node = &bvh.nodes[k];
-        (!node.is_leaf()).then(|| node.bounds().surface_area())
-    };
-    let first = &bvh.nodes[b];
-    let mut n = if first.is_leaf() {
-        kids[0] = b;
-        1
-    } else {
-        for (i, k) in [b + 1, first.offset as usize].into_iter().enumerate() {
-            (kids[i], areas[i]) = (k, area(k));
-        }
-        2
-    };
-    // Open the interior child of largest area until `WIDTH` children are reached; of
-    // equal areas the last, as `Iterator::max_by` picked before (the same tree).
-    while n < WIDTH {
-        let mut open: Option<(usize, f32)> = None;
-        for (k, a) in areas[..n].iter().enumerate() {
-            if let Some(a) = *a
-                && open.is_none_or(|(_, best)| a.total_cmp(&best).is_ge())
-            {
-                open = Some((k, a));
-            }
-        }
-        let Some((k, _)) = open else {
-            break;
-        };
-        let node = kids[k];
-        kids.copy_within(k + 1..n, k + 2);
-        areas.copy_within(k + 1..n, k + 2);
-        (kids[k], areas[k]) = (node + 1, area(node + 1));
-        let right = bvh.nodes[node].offset as usize;
-        (kids[k + 1], areas[k + 1]) = (right, area(right));
-        n += 1;
-    }
-    let mut deepest = depth;
-    for (lane, &k) in kids[..n].iter().enumerate() {
-        let node = &bvh.nodes[k];
-        if out[me].set_lane(lane, node) {
-            (out[me].child[lane], out[me].count[lane]) = leaf(node.offset, node.count);
-        } else {
-            let (child, d) = collapse_node(bvh, k, depth + 1, out, leaf);
-            out[me].child[lane] = child;
-            deepest = deepest.max(d);
-        }
-    }
-    (me as u32, deepest)
 }

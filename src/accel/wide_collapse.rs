@@ -1,0 +1,216 @@
+//! The collapse of the binary tree into `WIDTH`-wide nodes, chosen by a cost (after
+//! Ylitie, Karras, Laine 2017, "Efficient incoherent ray traversal on GPUs through
+//! compressed wide BVHs"): for each binary node and each number of lanes `i`, the least
+//! surface-area cost of holding its subtree in at most `i` lanes of a wide node, each
+//! lane a wide node of its own or a leaf. A leaf may be a whole binary subtree of up
+//! to [`MAX_LEAF`] triangles, so that small sibling leaves share one group of
+//! [`LANES`] instead of padding two (its triangles are consecutive slots, so it stays
+//! one `(slot, count)`); and a node takes whichever cut of its subtree costs least,
+//! not the largest-area children first, which left the nodes below half empty.
+//!
+//! The tree changes, the answers do not: the queries decide the closest hit by
+//! (t, index) whatever the visiting order, and every box holds its triangles.
+
+use arrayvec::ArrayVec;
+
+use super::bvh::Bvh;
+use super::leaf::{LANES, groups_for};
+use super::wide_node::{WIDTH, WideNode};
+
+/// Cost of a ray meeting a node's box: its slab test of `WIDTH` children and their
+/// ordering, the unit of the costs below. The figures hardly matter: from leaf 0 to 1
+/// and group 0.8 to 3 (callgrind, torus 100k) single rays and packets cost within 1% of each
+/// other, at 52.8 to 55.3 bytes per triangle.
+pub(super) const NODE_COST: f32 = 1.0;
+/// Cost of a ray visiting a leaf, beside its groups: the visit and its bookkeeping.
+const LEAF_COST: f32 = 0.3;
+/// Cost of testing a ray against one group of `LANES` triangles.
+const GROUP_COST: f32 = 1.2;
+/// Most triangles a subtree merged into one leaf may hold (two groups); the binary
+/// leaves, which the binned SAH makes of 1 to 8, stay leaves whatever their size. Four
+/// (one group) cost the same per ray at 55.3 rather than 54.7 bytes per triangle.
+const MAX_LEAF: u32 = 2 * LANES as u32;
+
+/// A wide node's lanes: `(binary node, leaf)`.
+type Lanes = ArrayVec<(usize, bool), WIDTH>;
+
+/// Per binary node: its subtree's first slot in `prim_indices` and triangle count, and
+/// `cost[i - 1]`, the least cost of its subtree in at most `i` lanes.
+struct Costs {
+    first: Vec<u32>,
+    count: Vec<u32>,
+    cost: Vec<[f32; WIDTH]>,
+}
+
+/// Cost of a leaf of `count` triangles whose box has area `area` (the odds of a ray
+/// meeting a box grow with its area).
+pub(super) fn leaf_cost(area: f32, count: u32) -> f32 {
+    area * (LEAF_COST + GROUP_COST * groups_for(count as usize) as f32)
+}
+
+/// The least cost of an interior node as one lane, and whether that is a leaf (else a
+/// wide node of its own), from its box's area, its triangles and the least cost of its
+/// children in `WIDTH` lanes.
+fn single(area: f32, count: u32, children: f32) -> (f32, bool) {
+    let node = NODE_COST * area + children;
+    if count <= MAX_LEAF {
+        let leaf = leaf_cost(area, count);
+        if leaf <= node {
+            return (leaf, true);
+        }
+    }
+    (node, false)
+}
+
+/// The least cost of two children, of lane costs `left` and `right`, in at most `i`
+/// lanes together: entry `i - 1` (infinite for one lane). The same sums and minimum as
+/// `Costs::split`, all `i` at once and without branches: the collapse took 2.1 times
+/// the greedy one's instructions with a `split` per `i`, 1.6 times with this (torus
+/// 100k: 15.5 -> 24.9 million, about 1 ms more).
+#[inline(always)]
+fn splits(left: &[f32; WIDTH], right: &[f32; WIDTH]) -> [f32; WIDTH] {
+    let mut least = [f32::INFINITY; WIDTH];
+    // Left child in k lanes, right in the rest: a select per lane, no branch.
+    for k in 1..WIDTH {
+        let l = left[k - 1];
+        for (least, &r) in least[k..].iter_mut().zip(&right[..WIDTH - k]) {
+            let cost = l + r;
+            *least = if cost < *least { cost } else { *least };
+        }
+    }
+    least
+}
+
+impl Costs {
+    /// The costs of every node of `bvh` (not empty), children before parents.
+    fn new(bvh: &Bvh) -> Costs {
+        let n = bvh.nodes.len();
+        let mut c = Costs {
+            first: vec![0; n],
+            count: vec![0; n],
+            cost: vec![[0.0; WIDTH]; n],
+        };
+        // Children follow their parent: reverse order meets them first.
+        for b in (0..n).rev() {
+            let node = &bvh.nodes[b];
+            if node.is_leaf() {
+                (c.first[b], c.count[b]) = (node.offset, node.count);
+                c.cost[b] = [leaf_cost(node.bounds().surface_area(), node.count); WIDTH];
+                continue;
+            }
+            let (left, right) = (b + 1, node.offset as usize);
+            (c.first[b], c.count[b]) = (c.first[left], c.count[left] + c.count[right]);
+            let splits = splits(&c.cost[left], &c.cost[right]);
+            let area = node.bounds().surface_area();
+            let mut best = single(area, c.count[b], splits[WIDTH - 1]).0;
+            c.cost[b][0] = best;
+            for i in 2..=WIDTH {
+                best = best.min(splits[i - 1]);
+                c.cost[b][i - 1] = best;
+            }
+        }
+        c
+    }
+
+    /// [`single`] of interior node `b`.
+    fn single(&self, bvh: &Bvh, b: usize) -> (f32, bool) {
+        let area = bvh.nodes[b].bounds().surface_area();
+        single(area, self.count[b], self.split(bvh, b, WIDTH).0)
+    }
+
+    /// The least cost of interior node `b`'s two children in at most `i` (2 or more)
+    /// lanes together, and the lanes of the first child in it (the fewest of equals).
+    fn split(&self, bvh: &Bvh, b: usize, i: usize) -> (f32, usize) {
+        let (left, right) = (b + 1, bvh.nodes[b].offset as usize);
+        let mut best = (f32::INFINITY, 1);
+        for k in 1..i {
+            let cost = self.cost[left][k - 1] + self.cost[right][i - k - 1];
+            if cost < best.0 {
+                best = (cost, k);
+            }
+        }
+        best
+    }
+
+    /// Appends to `lanes` the lanes of binary node `b`'s subtree in at most `i` lanes,
+    /// at the least cost, in depth-first (slot) order: `(node, leaf)`.
+    fn lanes(&self, bvh: &Bvh, b: usize, i: usize, lanes: &mut Lanes) {
+        if bvh.nodes[b].is_leaf() {
+            lanes.push((b, true));
+            return;
+        }
+        // The fewest lanes that reach the least cost, as `new` took the minimum.
+        let fewest = (1..=i)
+            .find(|&j| self.cost[b][j - 1] == self.cost[b][i - 1])
+            .unwrap_or(i);
+        if fewest == 1 {
+            lanes.push((b, self.single(bvh, b).1));
+            return;
+        }
+        let k = self.split(bvh, b, fewest).1;
+        self.lanes(bvh, b + 1, k, lanes);
+        self.lanes(bvh, bvh.nodes[b].offset as usize, fewest - k, lanes);
+    }
+
+    /// Appends the wide node for binary node `b` (a leaf only at the root) and its
+    /// subtree at `depth`; returns its index and the deepest level in its subtree. Each
+    /// leaf lane's `(child, count)` comes from `leaf(first slot, count)`, called in slot
+    /// order.
+    fn node(
+        &self,
+        bvh: &Bvh,
+        b: usize,
+        depth: u32,
+        out: &mut Vec<WideNode>,
+        leaf: &mut impl FnMut(u32, u32) -> (u32, u32),
+    ) -> (u32, u32) {
+        let me = out.len();
+        out.push(WideNode::UNUSED);
+        let mut lanes = Lanes::new();
+        if bvh.nodes[b].is_leaf() {
+            lanes.push((b, true));
+        } else {
+            let k = self.split(bvh, b, WIDTH).1;
+            self.lanes(bvh, b + 1, k, &mut lanes);
+            self.lanes(bvh, bvh.nodes[b].offset as usize, WIDTH - k, &mut lanes);
+        }
+        let mut deepest = depth;
+        for (lane, &(k, is_leaf)) in lanes.iter().enumerate() {
+            out[me].set_child_bounds(lane, bvh.nodes[k].bounds());
+            if is_leaf {
+                (out[me].child[lane], out[me].count[lane]) = leaf(self.first[k], self.count[k]);
+            } else {
+                let (child, d) = self.node(bvh, k, depth + 1, out, leaf);
+                out[me].child[lane] = child;
+                deepest = deepest.max(d);
+            }
+        }
+        (me as u32, deepest)
+    }
+}
+
+/// Appends the wide nodes of `bvh` (not empty), root first; returns the deepest level
+/// below the root. Each leaf lane's `(child, count)` comes from `leaf(first slot,
+/// count)`, called in slot order (a leaf's triangles are `prim_indices[first..first +
+/// count]`).
+pub(super) fn collapse(
+    bvh: &Bvh,
+    out: &mut Vec<WideNode>,
+    leaf: &mut impl FnMut(u32, u32) -> (u32, u32),
+) -> u32 {
+    Costs::new(bvh).node(bvh, 0, 0, out, leaf).1
+}
+
+/// The least cost the collapse finds for `bvh` (not empty), root node included: the
+/// cost of the tree it makes.
+#[cfg(test)]
+pub(super) fn least_cost(bvh: &Bvh) -> f32 {
+    let c = Costs::new(bvh);
+    let root = &bvh.nodes[0];
+    let lanes = if root.is_leaf() {
+        c.cost[0][0]
+    } else {
+        c.split(bvh, 0, WIDTH).0
+    };
+    NODE_COST * root.bounds().surface_area() + lanes
+}
