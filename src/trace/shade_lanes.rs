@@ -242,7 +242,8 @@ fn shade_group(
         shadow_origins(&lanes.p, &lanes.p_error, &lanes.ng, &mut origins);
         let hit_lanes = (0..hits.len()).fold(0, |m, j| m | (hits[j].is_some() as u32) << j);
         for sample in samples {
-            shadows.push_packet(shadow_packet(&origins, sample, hit_lanes, first as u32));
+            shadows
+                .push_packet_with(|p| shadow_packet(&origins, sample, hit_lanes, first as u32, p));
         }
     }
     for (j, ((q, hit), r)) in rays.iter().zip(hits).zip(out).enumerate() {
@@ -262,21 +263,20 @@ fn shade_group(
     }
 }
 
-/// The shadow rays of one light sample of a group, already in lanes: lane `j` from
-/// `origins` to the sample's position on hit `j`'s behalf (owner `first + j`), where
-/// `hit_lanes` has a hit and the sample a contribution. Whole lanes are written, no
-/// ray is moved one float at a time (the packet query reads them as they are).
+/// The shadow rays of one light sample of a group into `packet`, already in lanes:
+/// lane `j` from `origins` to the sample's position on hit `j`'s behalf (owner
+/// `first + j`), active where `hit_lanes` has a hit and the sample a contribution.
+/// Whole lanes are written, no ray is moved one float at a time (the packet query
+/// reads them as they are).
 #[inline(always)]
 fn shadow_packet(
     origins: &Lanes3,
     sample: &SampleLanes,
     hit_lanes: u32,
     first: u32,
-) -> ShadowPacket {
-    let mut packet = ShadowPacket {
-        contribution: sample.c,
-        ..ShadowPacket::default()
-    };
+    packet: &mut ShadowPacket,
+) {
+    packet.contribution = sample.c;
     let rays = &mut packet.rays;
     rays.origin = *origins;
     for a in 0..3 {
@@ -291,7 +291,6 @@ fn shadow_packet(
         keep |= ((sample.keep[j] != 0) as u32) << j;
     }
     rays.active = keep & hit_lanes;
-    packet
 }
 
 /// `shade_chunks` of a render with `model`: chunk by chunk in parallel,

@@ -84,7 +84,7 @@ pub struct ShadowPackets {
     /// Rays in the packets in use.
     len: usize,
     /// Lanes [`Self::push`] has filled in the last packet; `PACKET` when it takes no
-    /// more (full, or pushed whole by [`Self::push_packet`]) or there is none.
+    /// more (full, or pushed whole by [`Self::push_packet_with`]) or there is none.
     open: usize,
 }
 
@@ -118,19 +118,23 @@ impl ShadowPackets {
         self.len += 1;
     }
 
-    /// Appends `p` as a packet of its own (nothing if no lane holds a ray).
-    pub fn push_packet(&mut self, p: ShadowPacket) {
-        if p.rays.active == 0 {
-            return;
-        }
+    /// Appends a packet of its own that `fill` writes in place (a kept packet, not
+    /// zeroed first: `fill` sets every field it needs, `rays.active` included), unless
+    /// it leaves no lane holding a ray. In place: building it on the stack and copying
+    /// it in cost 1.4% of the Cornell render.
+    #[inline(always)]
+    pub fn push_packet_with(&mut self, fill: impl FnOnce(&mut ShadowPacket)) {
         if self.used == self.packets.len() {
-            self.packets.push(p);
-        } else {
-            self.packets[self.used] = p;
+            self.packets.push(ShadowPacket::default());
         }
-        self.used += 1;
-        self.len += p.rays.active.count_ones() as usize;
-        self.open = PACKET;
+        let p = &mut self.packets[self.used];
+        fill(p);
+        let active = p.rays.active;
+        if active != 0 {
+            self.used += 1;
+            self.len += active.count_ones() as usize;
+            self.open = PACKET;
+        }
     }
 
     /// The packets, in queue order.
@@ -415,6 +419,36 @@ mod tests {
         queue.trace(&mut radiance, |_| Vec3::ZERO);
         assert_eq!(queue.arrived(), vec![Vec3::ZERO; 6]);
         assert_eq!(radiance, vec![Vec3::ZERO; CHUNK + 2]);
+    }
+
+    #[test]
+    fn packets_pushed_whole_keep_their_lanes_and_empty_ones_are_dropped() {
+        fn whole(lanes: &[usize]) -> impl FnOnce(&mut ShadowPacket) + '_ {
+            move |p| {
+                p.rays.active = 0;
+                for &r in lanes {
+                    p.set(r, &shadow(r as u32));
+                }
+            }
+        }
+        let mut queue = ShadowQueue::default();
+        for _ in 0..2 {
+            // The second round reuses the first one's packets: no stale lane comes back.
+            let buffers = queue.start(1);
+            buffers[0].push(shadow(0));
+            buffers[0].push_packet_with(whole(&[1, 3]));
+            buffers[0].push_packet_with(whole(&[]));
+            buffers[0].push(shadow(4));
+            buffers[0].push(shadow(5));
+            assert_eq!(buffers[0].packets().len(), 3, "a push after a whole packet");
+            let owners: Vec<u32> = queue.iter().map(|s| s.owner).collect();
+            assert_eq!(owners, [0, 1, 3, 4, 5]);
+            assert_eq!(queue.len(), 5);
+            assert_eq!(queue.to_vec()[2], shadow(3));
+        }
+        let buffers = queue.start(1);
+        buffers[0].push_packet_with(whole(&[6]));
+        assert_eq!(queue.to_vec(), [shadow(6)]);
     }
 
     #[test]
