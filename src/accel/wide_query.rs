@@ -201,9 +201,7 @@ impl WideBvh {
             rays.len(),
             t_max.len()
         );
-        let mut bounds = [0.0; PACKET];
-        bounds[..t_max.len()].copy_from_slice(t_max);
-        occluded_packet_dispatched(self, &RayLanes::from_rays(rays), &bounds)
+        occluded_packet_dispatched(self, rays, t_max)
     }
 
     /// [`Self::occluded_packet`] of the active lanes of `rays`, each bounded by `t_max`:
@@ -260,10 +258,13 @@ fn any_hit_dispatched(
     wide.any_hit_inlined(ray, t_max, visit)
 }
 
-/// [`WideBvh::occluded_packet`] for the best instruction set the CPU has.
+/// [`WideBvh::occluded_packet`] for the best instruction set the CPU has (the rays are
+/// put in lanes in here, with its instructions).
 #[multiversion(targets("x86_64+avx2+fma", "x86_64+sse4.2"))]
-fn occluded_packet_dispatched(wide: &WideBvh, rays: &RayLanes, t_max: &[f32; PACKET]) -> u32 {
-    wide.occluded_lanes_inlined(rays, t_max)
+fn occluded_packet_dispatched(wide: &WideBvh, rays: &[Ray], t_max: &[f32]) -> u32 {
+    let mut bounds = [0.0; PACKET];
+    bounds[..t_max.len()].copy_from_slice(t_max);
+    wide.occluded_lanes_inlined(&RayLanes::from_rays(rays), &bounds)
 }
 
 /// [`WideBvh::occluded_lanes`] for the best instruction set the CPU has. The bound is
