@@ -13,6 +13,7 @@
 //! - `wide_collapse`: the choice of the wide nodes and leaves, by a surface-area cost.
 //! - `wide_query`: the wide BVH's closest-hit and any-hit queries, one clone per instruction set.
 //! - `wide_packet`: the queries for packets of up to eight rays, one ray per SIMD lane.
+//! - `ray_lanes`: a packet's rays side by side ([`RayLanes`]), as those queries read them.
 //! - [`leaf`]: the wide BVH's leaf triangles in SIMD groups, with a vectorised prefilter.
 //! - [`instance`]: a two-level BVH, one wide BVH per mesh shared by its instances.
 
@@ -23,6 +24,7 @@ pub mod build;
 pub mod bvh;
 pub mod instance;
 pub mod leaf;
+mod ray_lanes;
 pub mod sphere;
 pub mod traverse;
 pub mod triangle;
@@ -35,6 +37,7 @@ mod wide_query;
 pub use aabb::Aabb;
 pub use bvh::{Bvh, BvhNode, SplitMethod};
 pub use instance::{Instance, TwoLevelBvh};
+pub use ray_lanes::RayLanes;
 pub use sphere::intersect_sphere;
 pub use traverse::{TraversalStats, TraversalVisitor};
 pub use triangle::{RayShear, TriangleHit, intersect_triangle, intersect_triangle_sheared};

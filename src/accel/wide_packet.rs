@@ -26,16 +26,14 @@ use wide::u32x8;
 
 use super::bvh::MAX_DEPTH;
 use super::leaf::{LANES, LaneValues, TriGroup, groups_for, leaf_count};
+use super::ray_lanes::Lanes;
 use super::triangle::{RayShear, TriangleHit, intersect_triangle_flagged};
 use super::wide_node::{EMPTY, WIDTH, WideNode, leaf_lanes};
 use super::wide_query::three_ulps_up;
-use super::{BOX_MARGIN, Ray, WideBvh};
+use super::{BOX_MARGIN, Ray, RayLanes, WideBvh};
 
 /// Rays per packet: one AVX2 register of f32.
 pub const PACKET: usize = 8;
-
-/// One f32 per ray of a packet.
-type Lanes = [f32; PACKET];
 
 /// Traversal stack entries any tree needs (as the single-ray traversal's).
 const STACK_SIZE: usize = (WIDTH - 1) * MAX_DEPTH as usize + 1;
@@ -55,8 +53,8 @@ fn first_lanes(n: usize) -> u32 {
     (1u32 << n) - 1
 }
 
-/// The per-ray constants of a packet, one lane per ray; lanes past the packet's rays
-/// hold zeros (never active).
+/// The per-ray constants of a packet, one lane per ray; lanes without a ray hold junk
+/// (never active).
 pub(super) struct PacketRays {
     /// Origin, world axes.
     origin: [Lanes; 3],
@@ -70,8 +68,8 @@ pub(super) struct PacketRays {
     bound: Lanes,
     /// Each ray's permuted axes as `axes_of` reads them: `2 * kz + (dir[kz] < 0)`.
     axes_key: [u32; PACKET],
-    /// Rays of the packet.
-    len: usize,
+    /// The lanes holding a ray.
+    active: u32,
 }
 
 /// The permuted axes `[kx, ky, kz]` of a key of [`PacketRays::axes_key`], as
@@ -111,23 +109,24 @@ impl PacketRays {
             rays.len(),
             t_max.len()
         );
+        let mut bounds = [0.0; PACKET];
+        bounds[..t_max.len()].copy_from_slice(t_max);
+        PacketRays::from_lanes(&RayLanes::from_rays(rays), &bounds)
+    }
+
+    /// The constants of the active rays of `rays` with bounds `t_max`, read lane by
+    /// lane: no transposition (inactive lanes compute junk, never read).
+    #[inline(always)]
+    pub(super) fn from_lanes(rays: &RayLanes, t_max: &Lanes) -> PacketRays {
         let mut p = PacketRays {
-            origin: [[0.0; PACKET]; 3],
-            dir: [[0.0; PACKET]; 3],
+            origin: rays.origin,
+            dir: rays.dir,
             inv_dir: [[0.0; PACKET]; 3],
-            cull: [0.0; PACKET],
-            bound: [0.0; PACKET],
+            cull: *t_max,
+            bound: *t_max,
             axes_key: [0; PACKET],
-            len: rays.len(),
+            active: rays.active & first_lanes(PACKET),
         };
-        for (r, (ray, &t_max)) in rays.iter().zip(t_max).enumerate() {
-            let (o, d) = (ray.origin.to_array(), ray.dir.to_array());
-            for axis in 0..3 {
-                p.origin[axis][r] = o[axis];
-                p.dir[axis][r] = d[axis];
-            }
-            (p.cull[r], p.bound[r]) = (t_max, t_max);
-        }
         // Lane by lane, in loops of their own for the compiler to vectorize (with the
         // choice of axes in the same loop, the divisions stayed scalar): the same f32
         // operations as `Vec3::recip` and `RayShear::new`'s choice of axes.
@@ -437,14 +436,14 @@ fn key(t: f32, c: usize) -> u64 {
 }
 
 impl WideBvh {
-    /// [`Self::occluded_packet`] compiled for whatever target features the caller has.
+    /// [`Self::occluded_lanes`] compiled for whatever target features the caller has.
     #[inline(always)]
-    pub(super) fn occluded_packet_inlined(&self, rays: &[Ray], t_max: &[f32]) -> u32 {
-        if self.nodes.is_empty() || rays.is_empty() {
+    pub(super) fn occluded_lanes_inlined(&self, rays: &RayLanes, t_max: &Lanes) -> u32 {
+        if self.nodes.is_empty() || rays.active == 0 {
             return 0;
         }
-        let p = PacketRays::new(rays, t_max);
-        let mut todo = first_lanes(p.len);
+        let p = PacketRays::from_lanes(rays, t_max);
+        let mut todo = p.active;
         let mut occluded = 0;
         while todo != 0 {
             let first = todo.trailing_zeros() as usize;
@@ -521,7 +520,7 @@ impl WideBvh {
         }
         let mut p = PacketRays::new(rays, t_max);
         let limit = p.cull;
-        let mut todo = first_lanes(p.len);
+        let mut todo = p.active;
         while todo != 0 {
             let first = todo.trailing_zeros() as usize;
             let (shear, class) = (p.shear(first), p.same_axes(first) & todo);

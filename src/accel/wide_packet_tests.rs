@@ -180,9 +180,11 @@ fn the_dispatched_packet_query_matches_the_baseline_build() {
     let rays = rays(&wide, 4_000, 12);
     for chunk in rays.chunks(PACKET) {
         let (r, t): (Vec<Ray>, Vec<f32>) = chunk.iter().copied().unzip();
+        let mut bounds = [0.0; PACKET];
+        bounds[..t.len()].copy_from_slice(&t);
         assert_eq!(
             wide.occluded_packet(&r, &t),
-            wide.occluded_packet_inlined(&r, &t)
+            wide.occluded_lanes_inlined(&RayLanes::from_rays(&r), &bounds)
         );
     }
 }
@@ -261,6 +263,45 @@ fn grazing_hits_near_t_zero_match_in_packets() {
     let wide = build(&tris);
     assert!(check_closest(&wide, &rays) > rays.len() / 2);
     check(&wide, &rays, |r, t| wide.occluded_packet(r, t));
+}
+
+#[test]
+fn lanes_with_holes_get_their_single_ray_answers() {
+    let (_, wide) = scene();
+    let rays = rays(&wide, 8_000, 13);
+    let mut rng = Lcg(7);
+    let mut blocked = 0;
+    for chunk in rays.chunks(PACKET) {
+        // A random mask of lanes holding a ray; the others keep junk (a ray, a NaN or
+        // zero direction, or the zeros past the chunk).
+        let mut lanes = RayLanes::default();
+        let mut t_max = [0.0; PACKET];
+        for (r, (ray, t)) in chunk.iter().enumerate() {
+            lanes.set(r, ray);
+            t_max[r] = *t;
+        }
+        let active = (rng.next_f32() * 256.0) as u32 & ((1 << chunk.len()) - 1);
+        for r in 0..PACKET {
+            if active & (1 << r) == 0 && r % 3 != 2 {
+                let junk = if r % 3 == 0 { f32::NAN } else { 0.0 };
+                (lanes.dir[0][r], lanes.dir[1][r]) = (junk, junk);
+            }
+        }
+        lanes.active = active;
+        let got = wide.occluded_lanes_inlined(&lanes, &t_max);
+        assert_eq!(got & !lanes.active, 0, "bits of inactive lanes");
+        // And the public query, with one bound for every lane.
+        let one = wide.occluded_lanes(&lanes, t_max[0]);
+        assert_eq!(one & !lanes.active, 0, "bits of inactive lanes");
+        for r in lanes.lanes() {
+            let want = wide.any_hit(&lanes.ray(r), t_max[r], |_, _| true);
+            assert_eq!(got >> r & 1 == 1, want, "lane {r} of {:#b}", lanes.active);
+            blocked += want as usize;
+            let want = wide.any_hit(&lanes.ray(r), t_max[0], |_, _| true);
+            assert_eq!(one >> r & 1 == 1, want, "lane {r}, bound {}", t_max[0]);
+        }
+    }
+    assert!(blocked > 100, "{blocked} rays blocked");
 }
 
 #[test]

@@ -11,8 +11,8 @@ use multiversion::multiversion;
 
 use super::leaf::{LANES, RayLeaf, groups_for, leaf_count};
 use super::triangle::{RayShear, TriangleHit};
-use super::wide_packet::PacketHits;
-use super::{Ray, WideBvh};
+use super::wide_packet::{PACKET, PacketHits};
+use super::{Ray, RayLanes, WideBvh};
 
 /// What a query does at each leaf the traversal reaches.
 pub(super) trait LeafVisitor {
@@ -195,7 +195,20 @@ impl WideBvh {
     /// `rays[i]` in (0, `t_max[i]`), exactly when `any_hit(&rays[i], t_max[i], |_, _|
     /// true)` is true.
     pub fn occluded_packet(&self, rays: &[Ray], t_max: &[f32]) -> u32 {
+        assert!(
+            rays.len() <= PACKET && t_max.len() == rays.len(),
+            "a packet of {} rays and {} bounds",
+            rays.len(),
+            t_max.len()
+        );
         occluded_packet_dispatched(self, rays, t_max)
+    }
+
+    /// [`Self::occluded_packet`] of the active lanes of `rays`, each bounded by `t_max`:
+    /// bit `i` set when a triangle occludes lane `i`'s ray (never for an inactive
+    /// lane). The rays are read in lanes as they are, not transposed.
+    pub fn occluded_lanes(&self, rays: &RayLanes, t_max: f32) -> u32 {
+        occluded_lanes_dispatched(self, rays, t_max)
     }
 
     /// For up to [`PACKET`](super::PACKET) rays at once (a packet; see
@@ -245,10 +258,21 @@ fn any_hit_dispatched(
     wide.any_hit_inlined(ray, t_max, visit)
 }
 
-/// [`WideBvh::occluded_packet`] for the best instruction set the CPU has.
+/// [`WideBvh::occluded_packet`] for the best instruction set the CPU has (the rays are
+/// put in lanes in here, with its instructions).
 #[multiversion(targets("x86_64+avx2+fma", "x86_64+sse4.2"))]
 fn occluded_packet_dispatched(wide: &WideBvh, rays: &[Ray], t_max: &[f32]) -> u32 {
-    wide.occluded_packet_inlined(rays, t_max)
+    let mut bounds = [0.0; PACKET];
+    bounds[..t_max.len()].copy_from_slice(t_max);
+    wide.occluded_lanes_inlined(&RayLanes::from_rays(rays), &bounds)
+}
+
+/// [`WideBvh::occluded_lanes`] for the best instruction set the CPU has. The bound is
+/// spread to the lanes in here: an array of it made by the caller (two 16-byte stores
+/// without AVX) stalled the 32-byte load that read it back.
+#[multiversion(targets("x86_64+avx2+fma", "x86_64+sse4.2"))]
+fn occluded_lanes_dispatched(wide: &WideBvh, rays: &RayLanes, t_max: f32) -> u32 {
+    wide.occluded_lanes_inlined(rays, &[t_max; PACKET])
 }
 
 /// [`WideBvh::closest_packet`] for the best instruction set the CPU has.

@@ -16,8 +16,8 @@ use crate::accel::leaf::NO_PRIM;
 use crate::accel::sphere::{sphere_roots, sphere_uv};
 use crate::accel::triangle::{RayShear, TriangleHit, intersect_triangle_sheared};
 use crate::accel::{
-    Aabb, Bvh, Instance, PACKET, Ray, SplitMethod, TraversalStats, TraversalVisitor, TwoLevelBvh,
-    WideBvh, gamma, intersect_sphere,
+    Aabb, Bvh, Instance, PACKET, Ray, RayLanes, SplitMethod, TraversalStats, TraversalVisitor,
+    TwoLevelBvh, WideBvh, gamma, intersect_sphere,
 };
 use crate::scene::{Acceleration, BvhSplit, Mesh, MeshData, Settings, Sphere, Transform};
 use crate::stats::{RenderStats, Stage};
@@ -457,26 +457,32 @@ impl SceneGeometry {
     }
 
     /// [`Self::occluded`] (unobserved) of up to [`PACKET`] rays with one `t_max`: bit `i`
-    /// set when `rays[i]` is occluded. The flattened triangles take the rays as one
-    /// packet (`WideBvh::occluded_packet`); instances and spheres, each ray they did
-    /// not occlude.
+    /// set when `rays[i]` is occluded ([`Self::occluded_lanes`] of them in lanes).
     pub fn occluded_packet(&self, rays: &[Ray], t_max: f32) -> u32 {
+        self.occluded_lanes(&RayLanes::from_rays(rays), t_max)
+    }
+
+    /// [`Self::occluded`] (unobserved) of the active lanes of `rays` with one `t_max`:
+    /// bit `i` set when lane `i`'s ray is occluded. The flattened triangles take the
+    /// lanes as one packet (`WideBvh::occluded_lanes`); instances and spheres, each ray
+    /// they did not occlude.
+    pub fn occluded_lanes(&self, rays: &RayLanes, t_max: f32) -> u32 {
         let wide = self.use_wide::<()>();
         let mut blocked = if wide {
-            self.tri_wide
-                .occluded_packet(rays, &[t_max; PACKET][..rays.len()])
+            self.tri_wide.occluded_lanes(rays, t_max)
         } else {
             0
         };
         if wide && self.instanced.is_empty() && self.sphere_bvh.nodes.is_empty() {
             return blocked;
         }
-        for (i, ray) in rays.iter().enumerate() {
+        for i in rays.lanes() {
+            let ray = rays.ray(i);
             let hit = blocked & (1 << i) == 0
                 && if wide {
-                    self.occluded_beyond_triangles(ray, t_max, &mut ())
+                    self.occluded_beyond_triangles(&ray, t_max, &mut ())
                 } else {
-                    self.occluded(ray, t_max, &mut ())
+                    self.occluded(&ray, t_max, &mut ())
                 };
             blocked |= (hit as u32) << i;
         }

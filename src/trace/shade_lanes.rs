@@ -6,8 +6,10 @@
 //! sampler kind per sample, one hit at a time.
 //!
 //! Same values bit for bit: every lane does the scalar code's f32 operations in the
-//! same order (Rust never contracts them into FMAs), and the shadow rays are written in
-//! the same order (hit by hit, then light by light, then sample by sample).
+//! same order (Rust never contracts them into FMAs). The shadow rays are written as
+//! packets, one per light sample of the group (lane j: hit j's ray), in light and
+//! sample order: each hit's rays come in the scalar loop's order (light by light, then
+//! sample by sample), so its radiance sums the same values in the same order.
 
 // Lane loops index several arrays by the same lane, the form the vectoriser wants.
 #![allow(clippy::needless_range_loop)]
@@ -21,11 +23,13 @@ pub(super) use super::lane_models::LaneModel;
 use super::lane_models::{
     HitLanes, LANES, Lanes, Lanes3, SampleLanes, blinn_phong_sample, phong_sample, shade_sample,
 };
-use super::shadow::{CHUNK, ShadowQueue, ShadowRay};
+use super::shadow::{CHUNK, ShadowPacket, ShadowPackets, ShadowQueue};
 use super::surface::{MIN_OFFSET_COORDINATE, Surface};
 use super::wavefront::{QueuedRay, ShadeContext, blend_alpha};
-use crate::accel::Ray;
 use crate::sampling::{PointSampler, SlotLanes};
+
+// A group's lanes are one shadow packet's.
+const _: () = assert!(LANES == crate::accel::PACKET);
 
 /// What a chunk's groups reuse, neither zeroed nor allocated per group.
 #[derive(Debug, Default)]
@@ -146,7 +150,7 @@ fn shade_group(
     rays: &[QueuedRay],
     hits: &[Option<Surface>],
     out: &mut [Vec3],
-    shadows: &mut Vec<ShadowRay>,
+    shadows: &mut ShadowPackets,
     scratch: &mut Scratch,
 ) {
     let Scratch { lanes, samples } = scratch;
@@ -233,43 +237,60 @@ fn shade_group(
         }
     }
     let samples = &samples[..count];
-    let mut origins = Lanes3::default();
     if cx.queue_shadows {
+        let mut origins = Lanes3::default();
         shadow_origins(&lanes.p, &lanes.p_error, &lanes.ng, &mut origins);
-    }
-    // Back to ray order: each hit's samples in light order, as the scalar loop.
-    for (j, ((q, hit), r)) in rays.iter().zip(hits).zip(out).enumerate() {
-        if hit.is_none() {
-            *r = q.weight * s.background;
-            continue;
-        };
-        let mut direct = Vec3::ZERO;
-        let origin = Vec3::new(origins[0][j], origins[1][j], origins[2][j]);
+        let hit_lanes = (0..hits.len()).fold(0, |m, j| m | (hits[j].is_some() as u32) << j);
         for sample in samples {
-            if sample.keep[j] == 0 {
-                continue;
-            }
-            let c = Vec3::new(sample.c[0][j], sample.c[1][j], sample.c[2][j]);
-            if cx.queue_shadows {
-                let target = Vec3::new(
-                    sample.position[0][j],
-                    sample.position[1][j],
-                    sample.position[2][j],
-                );
-                shadows.push(ShadowRay {
-                    ray: Ray {
-                        origin,
-                        dir: target - origin,
-                    },
-                    contribution: c,
-                    owner: (first + j) as u32,
-                });
-            } else {
-                direct += c;
-            }
+            shadows
+                .push_packet_with(|p| shadow_packet(&origins, sample, hit_lanes, first as u32, p));
         }
-        *r = direct;
     }
+    for (j, ((q, hit), r)) in rays.iter().zip(hits).zip(out).enumerate() {
+        *r = if hit.is_none() {
+            q.weight * s.background
+        } else if cx.queue_shadows {
+            // The light arrives through the shadow rays.
+            Vec3::ZERO
+        } else {
+            // Each hit's samples in light order, as the scalar loop adds them.
+            let mut direct = Vec3::ZERO;
+            for sample in samples.iter().filter(|sample| sample.keep[j] != 0) {
+                direct += Vec3::new(sample.c[0][j], sample.c[1][j], sample.c[2][j]);
+            }
+            direct
+        };
+    }
+}
+
+/// The shadow rays of one light sample of a group into `packet`, already in lanes:
+/// lane `j` from `origins` to the sample's position on hit `j`'s behalf (owner
+/// `first + j`), active where `hit_lanes` has a hit and the sample a contribution.
+/// Whole lanes are written, no ray is moved one float at a time (the packet query
+/// reads them as they are).
+#[inline(always)]
+fn shadow_packet(
+    origins: &Lanes3,
+    sample: &SampleLanes,
+    hit_lanes: u32,
+    first: u32,
+    packet: &mut ShadowPacket,
+) {
+    packet.contribution = sample.c;
+    let rays = &mut packet.rays;
+    rays.origin = *origins;
+    for a in 0..3 {
+        for j in 0..LANES {
+            // `ShadowOrigin::ray_to`'s `target - origin`.
+            rays.dir[a][j] = sample.position[a][j] - origins[a][j];
+        }
+    }
+    let mut keep = 0;
+    for j in 0..LANES {
+        packet.owner[j] = first + j as u32;
+        keep |= ((sample.keep[j] != 0) as u32) << j;
+    }
+    rays.active = keep & hit_lanes;
 }
 
 /// `shade_chunks` of a render with `model`: chunk by chunk in parallel,
@@ -308,11 +329,13 @@ mod tests {
     use glam::Vec2;
 
     use super::*;
+    use crate::accel::Ray;
     use crate::sampling::Sampler;
     use crate::scene::{ParallelogramLight, PointLight, SamplerKind, SegmentLight, Settings};
     use crate::shade::Shading;
     use crate::trace::lights::Lights;
     use crate::trace::materials::{MaterialData, Materials};
+    use crate::trace::shadow::ShadowRay;
     use crate::trace::wavefront::{PassRegion, ShadowOrigin, shade_chunks};
 
     /// A small deterministic generator (xorshift), numbers in [-1, 1).
@@ -423,9 +446,13 @@ mod tests {
         }
     }
 
-    /// Radiance and shadow rays as bits (NaN compares equal to itself).
+    /// Radiance and shadow rays as bits (NaN compares equal to itself), the shadow rays
+    /// owner by owner, each owner's in queue order: the lanes queue holds a group's rays
+    /// sample by sample, the scalar loop's hit by hit.
     fn bits(radiance: &[Vec3], shadows: &ShadowQueue) -> (Vec<[u32; 3]>, Vec<[u32; 10]>) {
         let v = |v: Vec3| v.to_array().map(f32::to_bits);
+        let mut shadows = shadows.to_vec();
+        shadows.sort_by_key(|s| s.owner);
         let shadows = shadows
             .iter()
             .map(|s| {
@@ -564,6 +591,19 @@ mod tests {
                             "{model:?}, {count} rays, lights {points}/{segments}/{parallelograms}, \
                              {kind:?}, {shadow_samples} samples, queue {queue_shadows}"
                         );
+                        // Traced, each ray gets its shadow rays' contributions in the
+                        // same order: the same sums, bit for bit.
+                        let visible = |s: &ShadowRay| {
+                            if s.ray.dir.x > 0.0 {
+                                s.contribution
+                            } else {
+                                Vec3::ZERO
+                            }
+                        };
+                        s0.trace(&mut r0, visible);
+                        s1.trace(&mut r1, visible);
+                        assert_eq!(bits(&r1, &s1), bits(&r0, &s0), "traced");
+                        assert_eq!(s1.arrived().len(), s1.len());
                         compared += s0.len();
                     }
                 }

@@ -16,7 +16,7 @@ use super::log::{HitObserver, LightObserver, RayTrace, TraceLog};
 use super::materials::Materials;
 use super::plan::RenderPlan;
 use super::shade_lanes::{LaneModel, shade_chunks_in_lanes};
-pub use super::shadow::{CHUNK, ShadowQueue, ShadowRay};
+pub use super::shadow::{CHUNK, ShadowPacket, ShadowPackets, ShadowQueue, ShadowRay};
 use super::surface::{SHADOW_EPSILON, Surface, offset_ray_origin_towards, surface_at};
 use super::surface_lanes::surfaces_at;
 use crate::accel::Ray;
@@ -269,7 +269,7 @@ fn shade_ray<M: Model>(
     i: usize,
     q: &QueuedRay,
     hit: &Option<Surface>,
-    shadows: &mut Vec<ShadowRay>,
+    shadows: &mut ShadowPackets,
     mut seen: impl FnMut(LightSample, Vec3, Option<u32>),
 ) -> Vec3 {
     let s = cx.settings;
@@ -462,20 +462,16 @@ pub fn trace_shadow_rays(
             s.contribution * geometry.transmittance(&s.ray, t_max, &materials, &mut ())
         });
     } else {
-        // Consecutive shadow rays (of neighbouring pixels, to the same light) as packets.
+        // The queue's packets as they are (the lanes shading's: sample k of eight
+        // neighbouring hits, to the same light), read in lanes by the packet query.
         wf.shadow_rays
-            .trace_packets(&mut wf.ray_radiance, |rays, arrived| {
-                // Only the packet's rays are copied (the rest stay zero, never read).
-                let mut packet = [Ray::new(Vec3::ZERO, Vec3::ZERO); crate::accel::PACKET];
-                for (p, s) in packet.iter_mut().zip(rays) {
-                    *p = s.ray;
-                }
-                let blocked = geometry.occluded_packet(&packet[..rays.len()], t_max);
-                for (i, (s, a)) in rays.iter().zip(arrived).enumerate() {
-                    *a = if blocked & (1 << i) != 0 {
+            .trace_packets(&mut wf.ray_radiance, |packet, arrived| {
+                let blocked = geometry.occluded_lanes(&packet.rays, t_max);
+                for r in packet.rays.lanes() {
+                    arrived[r] = if blocked & (1 << r) != 0 {
                         Vec3::ZERO
                     } else {
-                        s.contribution
+                        packet.contribution(r)
                     };
                 }
             });
