@@ -1,29 +1,23 @@
 use super::*;
 use crate::accel::{Aabb, Bvh, SplitMethod};
 use crate::scene::components::Sphere;
+use crate::test_util::Lcg as Rng;
 
-/// A small deterministic generator (xorshift64*).
-struct Rng(u64);
-
-impl Rng {
-    fn next(&mut self) -> u64 {
-        self.0 ^= self.0 >> 12;
-        self.0 ^= self.0 << 25;
-        self.0 ^= self.0 >> 27;
-        self.0.wrapping_mul(0x2545_f491_4f6c_dd1d)
-    }
-
+/// Signed numbers from the tests' shared stream.
+trait Signed {
     /// In [-1, 1).
+    fn signed(&mut self) -> f32;
+    /// In [-1, 1)^3.
+    fn vec3(&mut self) -> Vec3;
+}
+
+impl Signed for Rng {
     fn signed(&mut self) -> f32 {
-        (self.next() >> 40) as f32 / (1u64 << 23) as f32 - 1.0
+        self.next_f32() * 2.0 - 1.0
     }
 
     fn vec3(&mut self) -> Vec3 {
-        Vec3::new(self.signed(), self.signed(), self.signed())
-    }
-
-    fn below(&mut self, n: u64) -> u64 {
-        self.next() % n
+        self.vec() * 2.0 - Vec3::ONE
     }
 }
 
@@ -108,7 +102,7 @@ fn hit(rng: &mut Rng, g: &SceneGeometry) -> Option<Hit> {
             lane: 0,
         }),
         _ => {
-            let prim = rng.below(g.triangles_flattened() as u64) as u32;
+            let prim = rng.below(g.triangles_flattened() as u32);
             Some(Hit {
                 t: 1.0,
                 prim,
