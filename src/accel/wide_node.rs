@@ -247,7 +247,7 @@ mod tests {
             let ray = Ray::new(origin, dir);
             let t_max = if i % 4 == 0 { 2.0 } else { f32::INFINITY };
             let (t, mask) = RayBoxes::new(&ray).test(&node, t_max);
-            for lane in 0..WIDTH {
+            for (lane, &t) in t.iter().enumerate() {
                 let want = node
                     .child_bounds(lane)
                     .intersect_ray(origin, dir.recip(), t_max);
@@ -257,7 +257,7 @@ mod tests {
                     "{i} {lane} {ray:?}"
                 );
                 if let Some(want) = want {
-                    assert_eq!(t[lane].to_bits(), want.to_bits(), "{i} {lane} {ray:?}");
+                    assert_eq!(t.to_bits(), want.to_bits(), "{i} {lane} {ray:?}");
                     checked += 1;
                 }
             }
