@@ -291,19 +291,16 @@ impl RayLeaf {
         }
     }
 
-    /// Lane `lane` of `g` in ray space, as the scalar test computes it but for the sign
-    /// of x, y and the relative z (see [`Sheared`]): from `origin - vertex`, which takes
-    /// the vertex as the subtraction's memory operand, where `vertex - origin` loaded it
-    /// first (nine loads less per group).
+    /// Lane `lane` of `g` in ray space, as the scalar test computes it.
     #[inline(always)]
     fn shear(&self, g: &TriGroup, lane: usize) -> Sheared {
         let [kx, ky, kz] = self.axes;
         let [ox, oy, oz] = self.origin;
         let (sx, sy, sz) = (self.sx, self.sy, self.sz);
         let (a, b, c) = (&g.v[0], &g.v[1], &g.v[2]);
-        let (a_x, a_y, a_z) = (ox - a[kx][lane], oy - a[ky][lane], oz - a[kz][lane]);
-        let (b_x, b_y, b_z) = (ox - b[kx][lane], oy - b[ky][lane], oz - b[kz][lane]);
-        let (c_x, c_y, c_z) = (ox - c[kx][lane], oy - c[ky][lane], oz - c[kz][lane]);
+        let (a_x, a_y, a_z) = (a[kx][lane] - ox, a[ky][lane] - oy, a[kz][lane] - oz);
+        let (b_x, b_y, b_z) = (b[kx][lane] - ox, b[ky][lane] - oy, b[kz][lane] - oz);
+        let (c_x, c_y, c_z) = (c[kx][lane] - ox, c[ky][lane] - oy, c[kz][lane] - oz);
         Sheared {
             rel_z: [a_z, b_z, c_z],
             xy: [
@@ -314,17 +311,13 @@ impl RayLeaf {
                 c_x - sx * c_z,
                 c_y - sy * c_z,
             ],
-            z: [-sz * a_z, -sz * b_z, -sz * c_z],
+            z: [sz * a_z, sz * b_z, sz * c_z],
         }
     }
 }
 
 /// A triangle in ray space: the z coordinates of its vertices relative to the origin
-/// (permuted axes), their sheared x and y, their scaled z; the first two negated. Round
-/// to nearest is symmetric and a product's sign is its factors', so each is the scalar
-/// test's value negated (and the scaled z its value) to the bit but for the sign of a
-/// zero; the edge functions, products of two negated values, are then the scalar test's
-/// own wherever none is zero (the lanes decided from them), and the sizes are magnitudes.
+/// (permuted axes), their sheared x and y, their scaled z.
 struct Sheared {
     rel_z: [f32; 3],
     xy: [f32; 6],
@@ -452,8 +445,8 @@ impl Candidates {
     /// [`Candidates::hit`] for one ray, its shear recomputed from `ray` (the same
     /// bits) in the few lanes that need the scalar test, so that a single-ray query
     /// keeps only the prefilter's constants ([`RayLeaf`]) and not a [`RayShear`] in
-    /// memory for that call: torus 100k, 1,431 / 1,791 / 1,242 -> 1,396 / 1,757 / 1,184
-    /// instructions per primary / incoherent / shadow ray.
+    /// memory for that call: torus 100k, 1,431 / 1,791 / 1,242 -> 1,396 / 1,757 / 1,184 instructions per
+    /// primary / incoherent / shadow ray.
     #[inline(always)]
     pub fn ray_hit(
         &self,
