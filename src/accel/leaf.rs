@@ -441,51 +441,6 @@ impl Candidates {
     }
 }
 
-impl Candidates {
-    /// [`Candidates::hit`] for one ray, its shear recomputed from `ray` (the same
-    /// bits) in the few lanes that need the scalar test, so that a single-ray query
-    /// keeps only the prefilter's constants ([`RayLeaf`]) and not a [`RayShear`] in
-    /// memory for that call: torus 100k, 1,431 / 1,791 / 1,242 -> 1,396 / 1,757 / 1,184 instructions per
-    /// primary / incoherent / shadow ray.
-    #[inline(always)]
-    pub fn ray_hit(
-        &self,
-        lane: usize,
-        g: &TriGroup,
-        may_be_degenerate: bool,
-        ray: &Ray,
-        t_max: f32,
-    ) -> Option<TriangleHit> {
-        self.decide(
-            lane,
-            t_max,
-            may_be_degenerate,
-            || g.triangle(lane),
-            || scalar_ray_lane(g, lane, ray, t_max, may_be_degenerate),
-        )
-    }
-}
-
-/// [`scalar_lane`] with the ray's shear computed here.
-#[cold]
-#[inline(never)]
-fn scalar_ray_lane(
-    g: &TriGroup,
-    lane: usize,
-    ray: &Ray,
-    t_max: f32,
-    may_be_degenerate: bool,
-) -> Option<TriangleHit> {
-    scalar_lane(
-        g,
-        lane,
-        &RayShear::new(ray),
-        ray.origin,
-        t_max,
-        may_be_degenerate,
-    )
-}
-
 /// The scalar test on lane `lane` of `g`, for the few lanes whose values do not decide
 /// it: out of line and cold, so that the hot path builds nothing for it. As a closure
 /// inlined into `Candidates::hit` it was compiled apart all the same, and each lane

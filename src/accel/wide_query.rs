@@ -26,6 +26,7 @@ pub(super) trait LeafVisitor {
 struct RayLeaves<'a> {
     wide: &'a WideBvh,
     ray: &'a Ray,
+    shear: RayShear,
     pre: RayLeaf,
 }
 
@@ -57,7 +58,7 @@ impl RayLeaves<'_> {
             while lanes != 0 {
                 let lane = lanes.trailing_zeros() as usize;
                 lanes &= lanes - 1;
-                let h = candidates.ray_hit(lane, g, degenerate, ray, *bound);
+                let h = candidates.hit(lane, g, degenerate, &self.shear, ray.origin, *bound);
                 let Some(h) = h else {
                     continue;
                 };
@@ -207,8 +208,14 @@ impl WideBvh {
 impl<'a> RayLeaves<'a> {
     #[inline(always)]
     fn new(wide: &'a WideBvh, ray: &'a Ray) -> RayLeaves<'a> {
-        let pre = RayLeaf::new(ray, &RayShear::new(ray));
-        RayLeaves { wide, ray, pre }
+        let shear = RayShear::new(ray);
+        let pre = RayLeaf::new(ray, &shear);
+        RayLeaves {
+            wide,
+            ray,
+            shear,
+            pre,
+        }
     }
 }
 
