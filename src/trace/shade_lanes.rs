@@ -17,15 +17,13 @@
 use glam::Vec3;
 use multiversion::multiversion;
 
-use rayon::prelude::*;
-
 pub(super) use super::lane_models::LaneModel;
 use super::lane_models::{
     HitLanes, LANES, Lanes, Lanes3, SampleLanes, blinn_phong_sample, phong_sample, shade_sample,
 };
 use super::shadow::{CHUNK, ShadowPacket, ShadowPackets, ShadowQueue};
 use super::surface::{MIN_OFFSET_COORDINATE, Surface};
-use super::wavefront::{QueuedRay, ShadeContext, blend_alpha};
+use super::wavefront::{QueuedRay, ShadeContext, blend_alpha, for_each_shading_chunk};
 use crate::sampling::{PointSampler, SlotLanes};
 
 // A group's lanes are one shadow packet's.
@@ -304,14 +302,12 @@ pub(super) fn shade_chunks_in_lanes(
     radiance: &mut Vec<Vec3>,
     shadow_rays: &mut ShadowQueue,
 ) {
-    radiance.resize(rays.len(), Vec3::ZERO);
-    let chunk_shadows = shadow_rays.start(rays.len().div_ceil(CHUNK));
-    rays.par_chunks(CHUNK)
-        .zip(hits.par_chunks(CHUNK))
-        .zip(radiance.par_chunks_mut(CHUNK))
-        .zip(chunk_shadows.par_iter_mut())
-        .enumerate()
-        .for_each(|(c, (((rays, hits), out), shadows))| {
+    for_each_shading_chunk(
+        rays,
+        hits,
+        radiance,
+        shadow_rays,
+        |c, rays, hits, out, shadows| {
             let mut scratch = Scratch::default();
             let groups = rays
                 .chunks(LANES)
@@ -321,7 +317,8 @@ pub(super) fn shade_chunks_in_lanes(
                 let first = c * CHUNK + g * LANES;
                 shade_group(cx, model, first, rays, hits, out, shadows, &mut scratch);
             }
-        });
+        },
+    );
 }
 
 #[cfg(test)]

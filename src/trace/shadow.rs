@@ -214,24 +214,24 @@ impl ShadowQueue {
         &mut self.rays[..chunks]
     }
 
-    /// The live chunks' shadow rays.
-    fn live_rays(&self) -> &[ShadowPackets] {
+    /// The current depth's shadow rays, chunk by chunk.
+    pub fn chunks(&self) -> &[ShadowPackets] {
         &self.rays[..self.live]
     }
 
     /// Number of shadow rays.
     pub fn len(&self) -> usize {
-        self.live_rays().iter().map(ShadowPackets::len).sum()
+        self.chunks().iter().map(ShadowPackets::len).sum()
     }
 
     /// Whether there are no shadow rays.
     pub fn is_empty(&self) -> bool {
-        self.live_rays().iter().all(ShadowPackets::is_empty)
+        self.chunks().iter().all(ShadowPackets::is_empty)
     }
 
     /// The shadow rays in queue order.
     pub fn iter(&self) -> impl Iterator<Item = ShadowRay> + '_ {
-        self.live_rays().iter().flat_map(ShadowPackets::iter)
+        self.chunks().iter().flat_map(ShadowPackets::iter)
     }
 
     /// The shadow rays in queue order, copied into one vector.
@@ -246,7 +246,7 @@ impl ShadowQueue {
 
     /// What each shadow ray let through, in queue order (empty before tracing).
     pub fn arrived(&self) -> Vec<Vec3> {
-        let packets = self.live_rays().iter().flat_map(ShadowPackets::packets);
+        let packets = self.chunks().iter().flat_map(ShadowPackets::packets);
         let arrived = self.arrived.iter().take(self.live).flatten();
         packets
             .zip(arrived)

@@ -322,10 +322,33 @@ fn shade_ray<M: Model>(
     direct
 }
 
+/// Runs `shade(c, rays, hits, radiance, shadows)` on each [`CHUNK`] of rays and hits in
+/// parallel, with the chunk's part of `radiance` and its shadow-ray buffer; returns each
+/// chunk's result in order. Both are the last depth's buffers, refilled so that their
+/// allocations are reused. Chunks, not rays, own the shadow-ray buffers: no allocation per
+/// ray, and a deterministic queue.
+pub(super) fn for_each_shading_chunk<T: Send>(
+    rays: &[QueuedRay],
+    hits: &[Option<Surface>],
+    radiance: &mut Vec<Vec3>,
+    shadow_rays: &mut ShadowQueue,
+    shade: impl Fn(usize, &[QueuedRay], &[Option<Surface>], &mut [Vec3], &mut ShadowPackets) -> T + Sync,
+) -> Vec<T> {
+    // Every entry is written by `shade`: only entries the buffer lacks are made (and zeroed).
+    radiance.resize(rays.len(), Vec3::ZERO);
+    let chunk_shadows = shadow_rays.start(rays.len().div_ceil(CHUNK));
+    rays.par_chunks(CHUNK)
+        .zip(hits.par_chunks(CHUNK))
+        .zip(radiance.par_chunks_mut(CHUNK))
+        .zip(chunk_shadows.par_iter_mut())
+        .enumerate()
+        .map(|(c, (((rays, hits), out), shadows))| shade(c, rays, hits, out, shadows))
+        .collect()
+}
+
 /// Shades rays and hits chunk by chunk, in parallel, into `radiance` (each ray's) and
-/// `shadow_rays`, both in queue order; returns what `O` observed. Both are the last
-/// depth's buffers, refilled so that their allocations are reused. Chunks, not rays, own
-/// the shadow-ray vectors: no allocation per ray, and a deterministic queue.
+/// `shadow_rays`, both in queue order ([`for_each_shading_chunk`]); returns what `O`
+/// observed.
 pub(super) fn shade_chunks<O: LightObserver, M: Model>(
     cx: &ShadeContext,
     model: M,
@@ -334,16 +357,12 @@ pub(super) fn shade_chunks<O: LightObserver, M: Model>(
     radiance: &mut Vec<Vec3>,
     shadow_rays: &mut ShadowQueue,
 ) -> O {
-    // Every entry is written below: only entries the buffer lacks are made (and zeroed).
-    radiance.resize(rays.len(), Vec3::ZERO);
-    let chunk_shadows = shadow_rays.start(rays.len().div_ceil(CHUNK));
-    let observers: Vec<O> = rays
-        .par_chunks(CHUNK)
-        .zip(hits.par_chunks(CHUNK))
-        .zip(radiance.par_chunks_mut(CHUNK))
-        .zip(chunk_shadows.par_iter_mut())
-        .enumerate()
-        .map(|(c, (((rays, hits), out), shadows))| {
+    let observers: Vec<O> = for_each_shading_chunk(
+        rays,
+        hits,
+        radiance,
+        shadow_rays,
+        |c, rays, hits, out, shadows| {
             let mut observer = O::default();
             for (k, ((q, hit), r)) in rays.iter().zip(hits).zip(out).enumerate() {
                 let i = c * CHUNK + k;
@@ -352,12 +371,12 @@ pub(super) fn shade_chunks<O: LightObserver, M: Model>(
                 });
             }
             observer
-        })
-        .collect();
+        },
+    );
     // Only the observers are joined (nothing for `()`): the shadow rays stay in chunks.
     let mut observed = O::default();
     let mut before = 0;
-    for (s, o) in chunk_shadows.iter().zip(observers) {
+    for (s, o) in shadow_rays.chunks().iter().zip(observers) {
         observed.join(o, before as u32);
         before += s.len();
     }
