@@ -13,7 +13,7 @@ use crate::trace::geometry::Hit;
 use crate::trace::lights::LightSample;
 use crate::trace::log::{LightSampleSeen, RayTrace, TraversalLog};
 use crate::trace::surface::Surface;
-use crate::trace::wavefront::{QueuedRay, RayKind};
+use crate::trace::wavefront::{QueuedRay, RayKind, SurfaceQueue};
 
 /// One camera sample of the pixel.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -100,18 +100,18 @@ impl DebugTrace {
         sample: u32,
         depth: u32,
         rays: &[QueuedRay],
-        hits: &[Option<Surface>],
+        hits: &SurfaceQueue,
         traces: Vec<RayTrace>,
     ) {
         self.depth_start = self.rays.len();
-        for ((q, surface), trace) in rays.iter().zip(hits).zip(traces) {
+        for ((q, surface), trace) in rays.iter().zip(hits.iter()).zip(traces) {
             self.rays.push(RayRecord {
                 sample,
                 depth,
                 path: q.path,
                 ray: q.ray,
                 weight: q.weight,
-                hit: trace.hit.zip(*surface),
+                hit: trace.hit.zip(surface),
                 traversal: trace.traversal,
                 radiance: Vec3::ZERO,
             });

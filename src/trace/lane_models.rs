@@ -8,6 +8,7 @@
 
 use multiversion::multiversion;
 
+use super::surface_lanes::SurfaceLanes;
 use crate::sampling::SLOT_LANES;
 
 /// Hits shaded together.
@@ -19,14 +20,11 @@ pub(super) type Lanes = [f32; LANES];
 /// Three coordinates, each over the lanes.
 pub(super) type Lanes3 = [Lanes; 3];
 
-/// What the model reads of the group's hits, in lanes (lanes without a hit hold what
-/// an earlier group left there, or zeros, and are never read back).
+/// What the model reads of the group's hits' materials and rays, in lanes (lanes
+/// without a hit hold what an earlier group left there, or zeros, and are never read
+/// back); their shading points it reads from the queue's block (`SurfaceLanes`).
 #[derive(Clone, Copy, Debug, Default)]
 pub(super) struct HitLanes {
-    pub(super) p: Lanes3,
-    pub(super) p_error: Lanes3,
-    pub(super) ng: Lanes3,
-    pub(super) n: Lanes3,
     pub(super) kd: Lanes3,
     pub(super) w: Lanes3,
     // Read by Phong and Blinn-Phong only (left unfilled for Lambertian).
@@ -74,6 +72,7 @@ pub(super) struct SampleLanes {
 /// `ShadingInput`'s `lambertian(..) * w` after `try_normalize`, operation for operation.
 #[multiversion(targets("x86_64+avx2+fma", "x86_64+sse4.2"))]
 pub(super) fn shade_sample(
+    surface: &SurfaceLanes,
     hits: &HitLanes,
     position: &Lanes3,
     color: &Lanes3,
@@ -81,15 +80,15 @@ pub(super) fn shade_sample(
 ) {
     out.position = *position;
     for j in 0..LANES {
-        let lx = position[0][j] - hits.p[0][j];
-        let ly = position[1][j] - hits.p[1][j];
-        let lz = position[2][j] - hits.p[2][j];
+        let lx = position[0][j] - surface.p[0][j];
+        let ly = position[1][j] - surface.p[1][j];
+        let lz = position[2][j] - surface.p[2][j];
         // glam: `dot` left to right, `length_recip` = 1 / sqrt, then a multiply.
         let rcp = 1.0 / ((lx * lx) + (ly * ly) + (lz * lz)).sqrt();
         // `is_finite() && > 0` as two comparisons (NaN fails both).
         let ok = rcp > 0.0 && rcp < f32::INFINITY;
         let (lx, ly, lz) = (lx * rcp, ly * rcp, lz * rcp);
-        let cos = (hits.n[0][j] * lx) + (hits.n[1][j] * ly) + (hits.n[2][j] * lz);
+        let cos = (surface.n[0][j] * lx) + (surface.n[1][j] * ly) + (surface.n[2][j] * lz);
         // `lit` is `cos > 0`; there `cos.max(0.0)` is `cos` itself.
         let lit = cos > 0.0;
         for a in 0..3 {
@@ -106,23 +105,25 @@ pub(super) fn shade_sample(
 /// [`shade_sample`] for `phong`.
 #[multiversion(targets("x86_64+avx2+fma", "x86_64+sse4.2"))]
 pub(super) fn phong_sample(
+    surface: &SurfaceLanes,
     hits: &HitLanes,
     position: &Lanes3,
     color: &Lanes3,
     out: &mut SampleLanes,
 ) {
-    specular_sample::<false>(hits, position, color, out);
+    specular_sample::<false>(surface, hits, position, color, out);
 }
 
 /// Blinn-Phong's contribution, as [`phong_sample`] for `blinn_phong`.
 #[multiversion(targets("x86_64+avx2+fma", "x86_64+sse4.2"))]
 pub(super) fn blinn_phong_sample(
+    surface: &SurfaceLanes,
     hits: &HitLanes,
     position: &Lanes3,
     color: &Lanes3,
     out: &mut SampleLanes,
 ) {
-    specular_sample::<true>(hits, position, color, out);
+    specular_sample::<true>(surface, hits, position, color, out);
 }
 
 /// `phong` (or `blinn_phong` when `BLINN`) times `w` after `try_normalize`, operation
@@ -130,6 +131,7 @@ pub(super) fn blinn_phong_sample(
 /// at a time (a call, which would stop the loops from being vectorised), then the sum.
 #[inline(always)]
 fn specular_sample<const BLINN: bool>(
+    surface: &SurfaceLanes,
     hits: &HitLanes,
     position: &Lanes3,
     color: &Lanes3,
@@ -142,13 +144,13 @@ fn specular_sample<const BLINN: bool>(
     let mut lk = Lanes3::default();
     let mut base = Lanes::default();
     for j in 0..LANES {
-        let lx = position[0][j] - hits.p[0][j];
-        let ly = position[1][j] - hits.p[1][j];
-        let lz = position[2][j] - hits.p[2][j];
+        let lx = position[0][j] - surface.p[0][j];
+        let ly = position[1][j] - surface.p[1][j];
+        let lz = position[2][j] - surface.p[2][j];
         let rcp = 1.0 / ((lx * lx) + (ly * ly) + (lz * lz)).sqrt();
         ok[j] = rcp > 0.0 && rcp < f32::INFINITY;
         let l = [lx * rcp, ly * rcp, lz * rcp];
-        let n = [hits.n[0][j], hits.n[1][j], hits.n[2][j]];
+        let n = [surface.n[0][j], surface.n[1][j], surface.n[2][j]];
         let v = [hits.v[0][j], hits.v[1][j], hits.v[2][j]];
         let cos = (n[0] * l[0]) + (n[1] * l[1]) + (n[2] * l[2]);
         // `lit` is `cos > 0`; there `cos.max(0.0)` is `cos` itself.

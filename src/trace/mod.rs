@@ -15,4 +15,5 @@ mod shade_lanes;
 pub mod shadow;
 pub mod surface;
 mod surface_lanes;
+mod surface_queue;
 pub mod wavefront;

@@ -22,7 +22,8 @@ use super::lane_models::{
     HitLanes, LANES, Lanes, Lanes3, SampleLanes, blinn_phong_sample, phong_sample, shade_sample,
 };
 use super::shadow::{CHUNK, ShadowPacket, ShadowPackets, ShadowQueue};
-use super::surface::{MIN_OFFSET_COORDINATE, Surface};
+use super::surface::MIN_OFFSET_COORDINATE;
+use super::surface_queue::{SurfaceBlock, SurfaceQueue};
 use super::wavefront::{QueuedRay, ShadeContext, blend_alpha, for_each_shading_chunk};
 use crate::sampling::{PointSampler, SlotLanes};
 
@@ -137,16 +138,16 @@ fn segment_lanes(
     }
 }
 
-/// Shades the group of up to [`LANES`] rays starting at queue index `first`: each ray's
-/// direct light into `out`, its shadow rays appended to `shadows`, exactly as
-/// `shade_ray` with `model` and nothing observed.
+/// Shades the group of up to [`LANES`] rays starting at queue index `first`, with their
+/// shading points in `hits`: each ray's direct light into `out`, its shadow rays
+/// appended to `shadows`, exactly as `shade_ray` with `model` and nothing observed.
 #[allow(clippy::too_many_arguments)] // The group, its outputs, the model and the scratch.
 fn shade_group(
     cx: &ShadeContext,
     model: LaneModel,
     first: usize,
     rays: &[QueuedRay],
-    hits: &[Option<Surface>],
+    hits: &SurfaceBlock,
     out: &mut [Vec3],
     shadows: &mut ShadowPackets,
     scratch: &mut Scratch,
@@ -159,16 +160,17 @@ fn shade_group(
     });
     let at = cx.sampler.at_lanes(&pixels, cx.region.sample);
     let mut points: [Option<PointSampler>; LANES] = [None; LANES];
-    for (j, (q, hit)) in rays.iter().zip(hits).enumerate() {
-        let Some(surface) = hit else { continue };
-        let m = &cx.materials.list[surface.material as usize];
+    let surface = &hits.lanes;
+    for (j, q) in rays.iter().enumerate() {
+        if hits.hit & (1 << j) == 0 {
+            continue;
+        }
+        let material = hits.material[j];
+        let m = &cx.materials.list[material as usize];
         let w = q.weight * blend_alpha(s, m.alpha, cx.depth);
-        let kd = cx.materials.kd_at(surface.material, surface.uv);
+        let uv = glam::Vec2::new(surface.uv[0][j], surface.uv[1][j]);
+        let kd = cx.materials.kd_at(material, uv);
         for a in 0..3 {
-            lanes.p[a][j] = surface.p[a];
-            lanes.p_error[a][j] = surface.p_error[a];
-            lanes.ng[a][j] = surface.ng[a];
-            lanes.n[a][j] = surface.n[a];
             lanes.kd[a][j] = kd[a];
             lanes.w[a][j] = w[a];
         }
@@ -201,9 +203,9 @@ fn shade_group(
         }
         let sample = &mut samples[count];
         match model {
-            LaneModel::Lambertian => shade_sample(lanes, position, color, sample),
-            LaneModel::Phong => phong_sample(lanes, position, color, sample),
-            LaneModel::BlinnPhong => blinn_phong_sample(lanes, position, color, sample),
+            LaneModel::Lambertian => shade_sample(surface, lanes, position, color, sample),
+            LaneModel::Phong => phong_sample(surface, lanes, position, color, sample),
+            LaneModel::BlinnPhong => blinn_phong_sample(surface, lanes, position, color, sample),
         }
         count += 1;
     };
@@ -237,15 +239,14 @@ fn shade_group(
     let samples = &samples[..count];
     if cx.queue_shadows {
         let mut origins = Lanes3::default();
-        shadow_origins(&lanes.p, &lanes.p_error, &lanes.ng, &mut origins);
-        let hit_lanes = (0..hits.len()).fold(0, |m, j| m | (hits[j].is_some() as u32) << j);
+        shadow_origins(&surface.p, &surface.p_error, &surface.ng, &mut origins);
         for sample in samples {
             shadows
-                .push_packet_with(|p| shadow_packet(&origins, sample, hit_lanes, first as u32, p));
+                .push_packet_with(|p| shadow_packet(&origins, sample, hits.hit, first as u32, p));
         }
     }
-    for (j, ((q, hit), r)) in rays.iter().zip(hits).zip(out).enumerate() {
-        *r = if hit.is_none() {
+    for (j, (q, r)) in rays.iter().zip(out).enumerate() {
+        *r = if hits.hit & (1 << j) == 0 {
             q.weight * s.background
         } else if cx.queue_shadows {
             // The light arrives through the shadow rays.
@@ -298,7 +299,7 @@ pub(super) fn shade_chunks_in_lanes(
     cx: &ShadeContext,
     model: LaneModel,
     rays: &[QueuedRay],
-    hits: &[Option<Surface>],
+    hits: &SurfaceQueue,
     radiance: &mut Vec<Vec3>,
     shadow_rays: &mut ShadowQueue,
 ) {
@@ -309,10 +310,7 @@ pub(super) fn shade_chunks_in_lanes(
         shadow_rays,
         |c, rays, hits, out, shadows| {
             let mut scratch = Scratch::default();
-            let groups = rays
-                .chunks(LANES)
-                .zip(hits.chunks(LANES))
-                .zip(out.chunks_mut(LANES));
+            let groups = rays.chunks(LANES).zip(hits).zip(out.chunks_mut(LANES));
             for (g, ((rays, hits), out)) in groups.enumerate() {
                 let first = c * CHUNK + g * LANES;
                 shade_group(cx, model, first, rays, hits, out, shadows, &mut scratch);
@@ -333,6 +331,7 @@ mod tests {
     use crate::trace::lights::Lights;
     use crate::trace::materials::{MaterialData, Materials};
     use crate::trace::shadow::ShadowRay;
+    use crate::trace::surface::Surface;
     use crate::trace::wavefront::{PassRegion, ShadowOrigin, shade_chunks};
 
     /// A small deterministic generator (xorshift), numbers in [-1, 1).
@@ -353,7 +352,7 @@ mod tests {
     /// `count` rays with hits (about one in five missing) in a box around the lights,
     /// some facing away from them, one sitting on the point light and one with a huge
     /// `kd` (non-finite contributions) or an infinite weight.
-    fn scene(count: usize, seed: u64) -> (Vec<QueuedRay>, Vec<Option<Surface>>) {
+    fn scene(count: usize, seed: u64) -> (Vec<QueuedRay>, SurfaceQueue) {
         let mut r = Numbers(seed);
         let rays = (0..count)
             .map(|i| QueuedRay {
@@ -503,14 +502,11 @@ mod tests {
             }
         }
         for group in surfaces.chunks(LANES) {
-            let mut lanes = HitLanes::default();
+            let mut block = SurfaceBlock::default();
             for (j, s) in group.iter().enumerate() {
-                for a in 0..3 {
-                    lanes.p[a][j] = s.p[a];
-                    lanes.p_error[a][j] = s.p_error[a];
-                    lanes.ng[a][j] = s.ng[a];
-                }
+                block.set(j, Some(*s));
             }
+            let lanes = &block.lanes;
             let mut origins = Lanes3::default();
             shadow_origins(&lanes.p, &lanes.p_error, &lanes.ng, &mut origins);
             for (j, s) in group.iter().enumerate() {

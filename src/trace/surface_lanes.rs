@@ -3,12 +3,13 @@
 //! paid its own square roots and divisions in a chain. Every lane does the f32
 //! operations of `surface_at` in the same order (glam's `cross`, `dot`, `max` and
 //! `normalize_or` written out), so each `Surface` is the scalar one, bit for bit.
-//! Other hits (instanced triangles, spheres) take `surface_at` itself.
+//! Other hits (instanced triangles, spheres) take `surface_at` itself. The points stay
+//! in lanes: they are written into the queue's block as they are.
 
-use glam::{Vec2, Vec3};
 use multiversion::multiversion;
 
-use super::surface::{Surface, surface_at};
+use super::surface::surface_at;
+use super::surface_queue::SurfaceBlock;
 use crate::accel::{PACKET, Ray, gamma};
 use crate::trace::geometry::{Hit, PrimKind, SceneGeometry};
 
@@ -31,32 +32,33 @@ struct TriangleLanes {
     dir: [Lanes; 3],
 }
 
-/// The fields of [`Surface`] but the material, one hit per lane.
-#[derive(Default)]
-struct SurfaceLanes {
-    p: [Lanes; 3],
-    p_error: [Lanes; 3],
-    ng: [Lanes; 3],
-    n: [Lanes; 3],
-    uv: [Lanes; 2],
+/// The fields of a `Surface` but the material, one hit per lane.
+#[derive(Clone, Copy, Debug, Default)]
+pub(super) struct SurfaceLanes {
+    pub(super) p: [Lanes; 3],
+    pub(super) p_error: [Lanes; 3],
+    pub(super) ng: [Lanes; 3],
+    pub(super) n: [Lanes; 3],
+    pub(super) uv: [Lanes; 2],
 }
 
 /// `surface_at` of each hit of `hits` (up to [`PACKET`]) on the ray of the same index
-/// in `rays`, into `out` (`None` for a miss).
-pub fn surfaces_at(
+/// in `rays`, into lane of the same index of `out` (its hit bits: the hits).
+pub(super) fn surfaces_at(
     geometry: &SceneGeometry,
     rays: &[Ray],
     hits: &[Option<Hit>],
     interpolate_normals: bool,
-    out: &mut [Option<Surface>],
+    out: &mut SurfaceBlock,
 ) {
-    assert!(rays.len() <= PACKET && hits.len() == rays.len() && out.len() == rays.len());
+    assert!(rays.len() <= PACKET && hits.len() == rays.len());
     let mut lanes = TriangleLanes::default();
-    let mut material = [0; PACKET];
     let mut flattened = 0u32;
-    for (j, ((ray, hit), out)) in rays.iter().zip(hits).zip(out.iter_mut()).enumerate() {
-        *out = match hit {
-            None => None,
+    // Hits of other kinds, made after the flattened triangles' lanes are written whole.
+    let mut others = 0u32;
+    for (j, (ray, hit)) in rays.iter().zip(hits).enumerate() {
+        match hit {
+            None => {}
             Some(
                 h @ Hit {
                     kind: PrimKind::Triangle,
@@ -85,31 +87,21 @@ pub fn surfaces_at(
                     lanes.bary[a][j] = h.bary[a];
                     lanes.dir[a][j] = ray.dir[a];
                 }
-                material[j] = geometry.tri_material[i];
+                out.material[j] = geometry.tri_material[i];
                 flattened |= 1 << j;
-                // Written below, from the lanes.
-                None
             }
-            Some(h) => Some(surface_at(geometry, ray, h, interpolate_normals)),
-        };
+            Some(_) => others |= 1 << j,
+        }
     }
-    if flattened == 0 {
-        return;
+    out.hit = flattened;
+    if flattened != 0 {
+        triangle_surfaces(&lanes, interpolate_normals, &mut out.lanes);
     }
-    let mut s = SurfaceLanes::default();
-    triangle_surfaces(&lanes, interpolate_normals, &mut s);
-    let lane3 = |v: &[Lanes; 3], j: usize| Vec3::new(v[0][j], v[1][j], v[2][j]);
-    while flattened != 0 {
-        let j = flattened.trailing_zeros() as usize;
-        flattened &= flattened - 1;
-        out[j] = Some(Surface {
-            p: lane3(&s.p, j),
-            p_error: lane3(&s.p_error, j),
-            ng: lane3(&s.ng, j),
-            n: lane3(&s.n, j),
-            uv: Vec2::new(s.uv[0][j], s.uv[1][j]),
-            material: material[j],
-        });
+    while others != 0 {
+        let j = others.trailing_zeros() as usize;
+        others &= others - 1;
+        let surface = hits[j].map(|h| surface_at(geometry, &rays[j], &h, interpolate_normals));
+        out.set(j, surface);
     }
 }
 

@@ -11,6 +11,7 @@ use glam::Vec3;
 use rayon::prelude::*;
 
 pub use super::camera_samples::{CameraSampleOffsets, generate_camera_samples};
+use super::lane_models::LANES;
 use super::lights::{LightSample, Lights};
 use super::log::{HitObserver, LightObserver, RayTrace, TraceLog};
 use super::materials::Materials;
@@ -19,6 +20,8 @@ use super::shade_lanes::{LaneModel, shade_chunks_in_lanes};
 pub use super::shadow::{CHUNK, ShadowPacket, ShadowPackets, ShadowQueue, ShadowRay};
 use super::surface::{SHADOW_EPSILON, Surface, offset_ray_origin_towards, surface_at};
 use super::surface_lanes::surfaces_at;
+use super::surface_queue::SurfaceBlock;
+pub use super::surface_queue::SurfaceQueue;
 use crate::accel::Ray;
 use crate::sampling::Sampler;
 use crate::scene::Settings;
@@ -118,7 +121,7 @@ pub struct Wavefront {
     /// Rays of the current depth.
     pub rays: Vec<QueuedRay>,
     /// Closest hit of each ray, and its shading point.
-    pub hits: Vec<Option<Surface>>,
+    pub hits: SurfaceQueue,
     /// Radiance gathered by each ray at this depth (direct light, background).
     pub ray_radiance: Vec<Vec3>,
     /// Shadow rays cast this depth, held by the shading chunks that cast them, and
@@ -143,22 +146,29 @@ fn closest_hits<O: HitObserver>(
     geometry: &SceneGeometry,
     rays: &[QueuedRay],
     interpolate: bool,
-    surfaces: &mut Vec<Option<Surface>>,
+    surfaces: &mut SurfaceQueue,
 ) -> Vec<O> {
     // One observer slot per ray, filled in place: for `()` the slots take no memory and
     // the loop is the plain query.
     let mut observers: Vec<O> = std::iter::repeat_with(O::default)
         .take(rays.len())
         .collect();
-    rays.par_iter()
-        .zip(observers.par_iter_mut())
-        .with_min_len(CHUNK)
-        .map(|(q, observer)| {
-            let hit = geometry.intersect(&q.ray, f32::INFINITY, observer);
-            observer.closest(hit.as_ref());
-            hit.map(|h| surface_at(geometry, &q.ray, &h, interpolate))
-        })
-        .collect_into_vec(surfaces);
+    surfaces.resize(rays.len());
+    surfaces
+        .blocks_mut()
+        .par_iter_mut()
+        .zip(rays.par_chunks(LANES).zip(observers.par_chunks_mut(LANES)))
+        .with_min_len(CHUNK / LANES)
+        .for_each(|(block, (rays, observers))| {
+            for (j, (q, observer)) in rays.iter().zip(observers).enumerate() {
+                let hit = geometry.intersect(&q.ray, f32::INFINITY, observer);
+                observer.closest(hit.as_ref());
+                block.set(
+                    j,
+                    hit.map(|h| surface_at(geometry, &q.ray, &h, interpolate)),
+                );
+            }
+        });
     observers
 }
 
@@ -168,15 +178,17 @@ fn closest_hits_in_packets(
     geometry: &SceneGeometry,
     rays: &[QueuedRay],
     interpolate: bool,
-    surfaces: &mut Vec<Option<Surface>>,
+    surfaces: &mut SurfaceQueue,
 ) {
     use crate::accel::PACKET;
-    // Every entry is written below: only the length is set here, so the buffer is not
+    // A packet's shading points are one block of the queue.
+    const _: () = assert!(PACKET == LANES);
+    // Every block is written below: only the length is set here, so the buffer is not
     // filled on one thread first (it keeps its length from depth to depth).
-    surfaces.truncate(rays.len());
-    surfaces.resize_with(rays.len(), || None);
+    surfaces.resize(rays.len());
     surfaces
-        .par_chunks_mut(PACKET)
+        .blocks_mut()
+        .par_iter_mut()
         .zip(rays.par_chunks(PACKET))
         .with_min_len(CHUNK / PACKET)
         .for_each(|(surfaces, rays)| {
@@ -322,23 +334,26 @@ fn shade_ray<M: Model>(
     direct
 }
 
-/// Runs `shade(c, rays, hits, radiance, shadows)` on each [`CHUNK`] of rays and hits in
-/// parallel, with the chunk's part of `radiance` and its shadow-ray buffer; returns each
+/// Runs `shade(c, rays, hits, radiance, shadows)` on each [`CHUNK`] of rays and their
+/// hits' blocks in parallel, with the chunk's part of `radiance` and its shadow-ray buffer; returns each
 /// chunk's result in order. Both are the last depth's buffers, refilled so that their
 /// allocations are reused. Chunks, not rays, own the shadow-ray buffers: no allocation per
 /// ray, and a deterministic queue.
 pub(super) fn for_each_shading_chunk<T: Send>(
     rays: &[QueuedRay],
-    hits: &[Option<Surface>],
+    hits: &SurfaceQueue,
     radiance: &mut Vec<Vec3>,
     shadow_rays: &mut ShadowQueue,
-    shade: impl Fn(usize, &[QueuedRay], &[Option<Surface>], &mut [Vec3], &mut ShadowPackets) -> T + Sync,
+    shade: impl Fn(usize, &[QueuedRay], &[SurfaceBlock], &mut [Vec3], &mut ShadowPackets) -> T + Sync,
 ) -> Vec<T> {
+    // A chunk's rays are whole blocks.
+    const _: () = assert!(CHUNK.is_multiple_of(LANES));
+    assert_eq!(hits.len(), rays.len());
     // Every entry is written by `shade`: only entries the buffer lacks are made (and zeroed).
     radiance.resize(rays.len(), Vec3::ZERO);
     let chunk_shadows = shadow_rays.start(rays.len().div_ceil(CHUNK));
     rays.par_chunks(CHUNK)
-        .zip(hits.par_chunks(CHUNK))
+        .zip(hits.blocks().par_chunks(CHUNK / LANES))
         .zip(radiance.par_chunks_mut(CHUNK))
         .zip(chunk_shadows.par_iter_mut())
         .enumerate()
@@ -353,7 +368,7 @@ pub(super) fn shade_chunks<O: LightObserver, M: Model>(
     cx: &ShadeContext,
     model: M,
     rays: &[QueuedRay],
-    hits: &[Option<Surface>],
+    hits: &SurfaceQueue,
     radiance: &mut Vec<Vec3>,
     shadow_rays: &mut ShadowQueue,
 ) -> O {
@@ -364,9 +379,10 @@ pub(super) fn shade_chunks<O: LightObserver, M: Model>(
         shadow_rays,
         |c, rays, hits, out, shadows| {
             let mut observer = O::default();
-            for (k, ((q, hit), r)) in rays.iter().zip(hits).zip(out).enumerate() {
+            for (k, (q, r)) in rays.iter().zip(out).enumerate() {
                 let i = c * CHUNK + k;
-                *r = shade_ray(cx, model, i, q, hit, shadows, |ls, c, shadow| {
+                let hit = hits[k / LANES].get(k % LANES);
+                *r = shade_ray(cx, model, i, q, &hit, shadows, |ls, c, shadow| {
                     observer.seen(i as u32, ls, c, shadow)
                 });
             }
@@ -387,7 +403,7 @@ pub(super) fn shade_chunks<O: LightObserver, M: Model>(
 struct ShadeRun<'a> {
     cx: &'a ShadeContext<'a>,
     rays: &'a [QueuedRay],
-    hits: &'a [Option<Surface>],
+    hits: &'a SurfaceQueue,
     radiance: &'a mut Vec<Vec3>,
     shadows: &'a mut ShadowQueue,
 }
@@ -457,10 +473,7 @@ pub fn shade_hits(
             log.light_samples = shade_chunks(&cx, cx.shading, rays, hits, radiance, shadows);
         }
     }
-    stats.record(
-        Stage::ShadeHits,
-        wf.hits.iter().filter(|h| h.is_some()).count() as u64,
-    );
+    stats.record(Stage::ShadeHits, wf.hits.hit_count() as u64);
 }
 
 /// Tests every shadow ray and adds the visible part of its contribution: binary
@@ -515,7 +528,7 @@ fn spawn_children(
     make: impl Fn(&QueuedRay, &Surface) -> Option<(Ray, Vec3)>,
 ) -> usize {
     let before = wf.next.len();
-    let children = wf.rays.iter().zip(&wf.hits).filter_map(|(q, hit)| {
+    let children = wf.rays.iter().zip(wf.hits.iter()).filter_map(|(q, hit)| {
         let (ray, weight) = make(q, hit.as_ref()?)?;
         Some(QueuedRay {
             ray,

@@ -18,7 +18,7 @@ use crate::world::{assert_close, material, queued, run, spheres, surface};
 fn hit_on_unit_sphere() -> Wavefront {
     Wavefront {
         rays: vec![queued(Vec3::new(0.0, 0.0, 5.0), -Vec3::Z, 0)],
-        hits: vec![Some(surface(Vec3::Z, Vec3::Z, 0))],
+        hits: vec![Some(surface(Vec3::Z, Vec3::Z, 0))].into(),
         ..Wavefront::default()
     }
 }
@@ -53,12 +53,12 @@ fn intersect_rays_finds_each_closest_hit() {
     run(&mut world, intersect_rays);
     let wf = world.resource::<Wavefront>();
     assert_eq!(wf.hits.len(), 3);
-    let hit = wf.hits[0].expect("the first ray hits");
+    let hit = wf.hits.get(0).expect("the first ray hits");
     assert_close(hit.p, Vec3::new(0.0, 0.0, 2.5));
     assert_close(hit.n, Vec3::Z);
     assert_eq!(hit.material, 1);
     assert_eq!(
-        wf.hits[1..],
+        wf.hits.iter().skip(1).collect::<Vec<_>>(),
         [None, None],
         "rays away from the spheres miss"
     );
@@ -122,7 +122,7 @@ fn shade_hits_reuses_its_shadow_buffers_without_keeping_old_rays() {
         "the same hit casts the same shadow ray, once"
     );
     // A depth whose only ray misses casts none, whatever the last one left behind.
-    world.resource_mut::<Wavefront>().hits = vec![None];
+    world.resource_mut::<Wavefront>().hits = vec![None].into();
     run(&mut world, shade_hits);
     let wf = world.resource::<Wavefront>();
     assert!(wf.shadow_rays.is_empty());
@@ -168,7 +168,7 @@ fn shade_hits_gives_misses_the_weighted_background() {
     {
         let mut wf = world.resource_mut::<Wavefront>();
         wf.rays[0].weight = Vec3::splat(0.5);
-        wf.hits[0] = None;
+        wf.hits.set(0, None);
     }
     run(&mut world, shade_hits);
     let wf = world.resource::<Wavefront>();
