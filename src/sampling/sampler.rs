@@ -346,21 +346,33 @@ pub struct SlotLanes {
 }
 
 impl SlotLanes {
-    /// The lanes of `slots`.
-    pub fn new(slots: [Option<SlotSampler>; SLOT_LANES]) -> Self {
+    /// The lanes of `points[j].slot(slot(j), n)` in each lane `j` set in `lanes` (the
+    /// others without a slot). The independent kind's packed slots need only their prefix
+    /// and first dimension: no `SlotSampler` is made for them.
+    pub fn new(
+        points: &[PointSampler; SLOT_LANES],
+        lanes: u32,
+        slot: impl Fn(usize) -> LightSlot,
+        n: u32,
+    ) -> Self {
         let mut prefix = [0; SLOT_LANES];
         let mut first = [0; SLOT_LANES];
         let mut packed = true;
-        for (j, s) in slots.iter().enumerate() {
-            if let Some(s) = s {
-                match (s.point.kind, s.first_dim) {
-                    (SamplerKind::Independent, Some(d)) => {
-                        (prefix[j], first[j]) = (s.point.prefix, d)
-                    }
-                    _ => packed = false,
-                }
+        for (j, p) in points.iter().enumerate() {
+            if lanes & (1 << j) == 0 {
+                continue;
+            }
+            let (depth, path, light) = slot(j);
+            match (p.kind, packed_light_dim(depth, path, light)) {
+                (SamplerKind::Independent, Some(d)) => (prefix[j], first[j]) = (p.prefix, d),
+                _ => packed = false,
             }
         }
+        let slots = if packed {
+            [None; SLOT_LANES]
+        } else {
+            std::array::from_fn(|j| (lanes & (1 << j) != 0).then(|| points[j].slot(slot(j), n)))
+        };
         Self {
             slots,
             prefix,

@@ -25,7 +25,7 @@ use super::shadow::{CHUNK, ShadowPacket, ShadowPackets, ShadowQueue};
 use super::surface::MIN_OFFSET_COORDINATE;
 use super::surface_queue::{SurfaceBlock, SurfaceQueue};
 use super::wavefront::{QueuedRay, ShadeContext, blend_alpha, for_each_shading_chunk};
-use crate::sampling::{PointSampler, SlotLanes};
+use crate::sampling::SlotLanes;
 
 // A group's lanes are one shadow packet's.
 const _: () = assert!(LANES == crate::accel::PACKET);
@@ -159,7 +159,6 @@ fn shade_group(
             .map_or(0, |q| cx.region.first_pixel.wrapping_add(q.slot))
     });
     let at = cx.sampler.at_lanes(&pixels, cx.region.sample);
-    let mut points: [Option<PointSampler>; LANES] = [None; LANES];
     let surface = &hits.lanes;
     for (j, q) in rays.iter().enumerate() {
         if hits.hit & (1 << j) == 0 {
@@ -182,18 +181,14 @@ fn shade_group(
             }
             lanes.shininess[j] = m.shininess;
         }
-        points[j] = Some(at[j]);
     }
     let lights = cx.lights;
     let n = s.shadow_samples.max(1);
     let inv = 1.0 / n as f32;
     let path = |j: usize| rays.get(j).map_or(0, |q| q.path);
     // Each lane's sample numbers of one area light (zeros in lanes without a hit).
-    let slots = |light: usize| {
-        SlotLanes::new(std::array::from_fn(|j| {
-            points[j].map(|p| p.slot((cx.depth, path(j), light as u32), n))
-        }))
-    };
+    let slots =
+        |light: usize| SlotLanes::new(&at, hits.hit, |j| (cx.depth, path(j), light as u32), n);
     // The group's samples, light by light, into `samples` (its entries are overwritten:
     // it keeps its length from group to group, so nothing is zeroed or copied twice).
     let mut count = 0;
