@@ -139,14 +139,16 @@ fn segment_lanes(
 }
 
 /// Shades the group of up to [`LANES`] rays starting at queue index `first`, with their
-/// shading points in `hits`: each ray's direct light into `out`, its shadow rays
-/// appended to `shadows`, exactly as `shade_ray` with `model` and nothing observed.
+/// pixels in `pixels` (0 past the group) and their shading points in `hits`: each ray's
+/// direct light into `out`, its shadow rays appended to `shadows`, exactly as
+/// `shade_ray` with `model` and nothing observed.
 #[allow(clippy::too_many_arguments)] // The group, its outputs, the model and the scratch.
 fn shade_group(
     cx: &ShadeContext,
     model: LaneModel,
     first: usize,
     rays: &[QueuedRay],
+    pixels: &[u32; LANES],
     hits: &SurfaceBlock,
     out: &mut [Vec3],
     shadows: &mut ShadowPackets,
@@ -154,11 +156,7 @@ fn shade_group(
 ) {
     let Scratch { lanes, samples } = scratch;
     let s = cx.settings;
-    let pixels = std::array::from_fn(|j| {
-        rays.get(j)
-            .map_or(0, |q| cx.region.first_pixel.wrapping_add(q.slot))
-    });
-    let at = cx.sampler.at_lanes(&pixels, cx.region.sample);
+    let at = cx.sampler.at_lanes(pixels, cx.region.sample);
     let surface = &hits.lanes;
     for (j, q) in rays.iter().enumerate() {
         if hits.hit & (1 << j) == 0 {
@@ -305,10 +303,28 @@ pub(super) fn shade_chunks_in_lanes(
         shadow_rays,
         |c, rays, hits, out, shadows| {
             let mut scratch = Scratch::default();
-            let groups = rays.chunks(LANES).zip(hits).zip(out.chunks_mut(LANES));
-            for (g, ((rays, hits), out)) in groups.enumerate() {
+            // The chunk's pixels, written before its first group: each group's hash
+            // loop reads its eight as one vector, which waited on eight fresh stores
+            // when the group wrote them itself.
+            let mut pixels = vec![0; rays.len().next_multiple_of(LANES)];
+            for (p, q) in pixels.iter_mut().zip(rays) {
+                *p = cx.region.first_pixel.wrapping_add(q.slot);
+            }
+            let groups = rays.chunks(LANES).zip(pixels.as_chunks().0);
+            let groups = groups.zip(hits).zip(out.chunks_mut(LANES));
+            for (g, (((rays, pixels), hits), out)) in groups.enumerate() {
                 let first = c * CHUNK + g * LANES;
-                shade_group(cx, model, first, rays, hits, out, shadows, &mut scratch);
+                shade_group(
+                    cx,
+                    model,
+                    first,
+                    rays,
+                    pixels,
+                    hits,
+                    out,
+                    shadows,
+                    &mut scratch,
+                );
             }
         },
     );
