@@ -347,8 +347,9 @@ pub struct SlotLanes {
 
 impl SlotLanes {
     /// The lanes of `points[j].slot(slot(j), n)` in each lane `j` set in `lanes` (the
-    /// others without a slot). The independent kind's packed slots need only their prefix
-    /// and first dimension: no `SlotSampler` is made for them.
+    /// others without a slot), for samples `k < n`. The independent kind's packed slots
+    /// need only their prefix and first dimension: no `SlotSampler` is made for them
+    /// unless `n` reaches past the packed sample field.
     pub fn new(
         points: &[PointSampler; SLOT_LANES],
         lanes: u32,
@@ -368,7 +369,7 @@ impl SlotLanes {
                 _ => packed = false,
             }
         }
-        let slots = if packed {
+        let slots = if packed && n <= 1 << LIGHT_SAMPLE_BITS {
             [None; SLOT_LANES]
         } else {
             std::array::from_fn(|j| (lanes & (1 << j) != 0).then(|| points[j].slot(slot(j), n)))
@@ -645,6 +646,16 @@ mod tests {
                     assert_eq!(slotted.light2(k), uv, "{kind:?}");
                     assert_eq!(point.light2(slot, k, n), uv, "{kind:?}");
                     assert_eq!(s.light2(pixel, sample, slot, k, n), uv, "{kind:?}");
+                    // The same numbers in lanes (lane 3 has no point: its number is unused).
+                    let points = s.at_lanes(&[pixel; SLOT_LANES], sample);
+                    let lanes = SlotLanes::new(&points, !(1 << 3), |_| slot, n);
+                    let (mut u1, mut u2, mut v2) = ([0.0; SLOT_LANES], [0.0; 8], [0.0; 8]);
+                    lanes.light1(k, &mut u1);
+                    lanes.light2(k, &mut u2, &mut v2);
+                    for j in (0..SLOT_LANES).filter(|&j| j != 3) {
+                        let got = (u1[j].to_bits(), Vec2::new(u2[j], v2[j]));
+                        assert_eq!(got, (u.to_bits(), uv), "{kind:?} {slot:?} {k} of {n}");
+                    }
                 }
             }
         }
