@@ -11,6 +11,7 @@ use multiversion::multiversion;
 
 use super::leaf::{LANES, RayLeaf, groups_for, leaf_count};
 use super::triangle::{RayShear, TriangleHit};
+use super::wide_node::RayBoxes;
 use super::wide_packet::{PACKET, PacketHits};
 use super::{Ray, RayLanes, WideBvh};
 
@@ -151,14 +152,17 @@ impl WideBvh {
         ray: &Ray,
         t_max: f32,
     ) -> Option<(u32, u32, TriangleHit)> {
+        // One division for the box test's inverse direction and the shear's scale.
+        let inv = ray.dir.recip().to_array();
+        let boxes = RayBoxes::with_inverse(ray, inv);
         let mut leaves = ClosestLeaves {
-            leaves: RayLeaves::new(self, ray),
+            leaves: RayLeaves::new(self, ray, inv),
             best: None,
             limit: t_max,
             bound: t_max,
         };
         let mut cull = t_max;
-        self.traverse::<true>(ray, &mut cull, &mut leaves);
+        self.traverse::<true>(&boxes, &mut cull, &mut leaves);
         leaves.best
     }
 
@@ -181,13 +185,15 @@ impl WideBvh {
         t_max: f32,
         visit: impl FnMut(u32, &TriangleHit) -> bool,
     ) -> bool {
+        let inv = ray.dir.recip().to_array();
+        let boxes = RayBoxes::with_inverse(ray, inv);
         let mut leaves = AnyLeaves {
-            leaves: RayLeaves::new(self, ray),
+            leaves: RayLeaves::new(self, ray, inv),
             bound: t_max,
             visit,
         };
         let mut cull = t_max;
-        self.traverse::<false>(ray, &mut cull, &mut leaves)
+        self.traverse::<false>(&boxes, &mut cull, &mut leaves)
     }
 
     /// For up to [`PACKET`](super::PACKET) rays at once (a packet, traced with one ray
@@ -220,8 +226,8 @@ impl WideBvh {
 
 impl<'a> RayLeaves<'a> {
     #[inline(always)]
-    fn new(wide: &'a WideBvh, ray: &'a Ray) -> RayLeaves<'a> {
-        let shear = RayShear::new(ray);
+    fn new(wide: &'a WideBvh, ray: &'a Ray, inv: [f32; 3]) -> RayLeaves<'a> {
+        let shear = RayShear::with_inverse(ray, inv);
         let pre = RayLeaf::new(ray, &shear);
         RayLeaves {
             wide,
