@@ -20,7 +20,7 @@ use super::wide_collapse::collapse;
 use super::wide_node::{EMPTY, RayBoxes, leaf_lanes};
 pub use super::wide_node::{WIDTH, WideNode};
 use super::wide_query::LeafVisitor;
-use super::{Aabb, BOX_MARGIN, Ray};
+use super::{Aabb, BOX_MARGIN};
 use arrayvec::ArrayVec;
 use glam::Vec3;
 
@@ -132,7 +132,7 @@ impl WideBvh {
             .collect()
     }
 
-    /// Visits leaves in near-to-far order of their boxes' entry distances while
+    /// Visits the leaves the ray of `boxes` meets in near-to-far order of their boxes' entry distances while
     /// they start before `*t_max` (`NEAREST_FIRST`), or each node's leaves before
     /// its interior children without sorting (for any-hit queries, where order does
     /// not decide the answer); `visitor.leaf(first, count, t_max)` may lower `t_max`
@@ -140,7 +140,7 @@ impl WideBvh {
     #[inline(always)]
     pub(super) fn traverse<const NEAREST_FIRST: bool>(
         &self,
-        ray: &Ray,
+        boxes: &RayBoxes,
         t_max: &mut f32,
         visitor: &mut impl LeafVisitor,
     ) -> bool {
@@ -154,7 +154,6 @@ impl WideBvh {
         // The node to visit next without a round trip through the stack: a node's
         // nearest interior child (any-hit: its last, which would be popped first).
         let mut next = Some((0, 0.0));
-        let boxes = RayBoxes::new(ray);
         // Lane indices below are taken `% WIDTH` (a no-op: masks have WIDTH bits) so
         // that the compiler drops the bounds checks on the node's lane arrays: 1,528 /
         // 1,914 -> 1,515 / 1,898 instructions per primary / incoherent ray (torus 100k).

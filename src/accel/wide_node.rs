@@ -73,9 +73,15 @@ pub(super) struct RayBoxes {
 }
 
 impl RayBoxes {
+    #[cfg(test)]
     pub(super) fn new(ray: &Ray) -> RayBoxes {
-        // An array indexes without glam's per-component `match` (a chain of branches).
-        let inv = ray.dir.recip().to_array();
+        RayBoxes::with_inverse(ray, ray.dir.recip().to_array())
+    }
+
+    /// The constants for `ray` with `inv` its `dir.recip()` (an array: it indexes without
+    /// glam's per-component `match`, a chain of branches).
+    #[inline(always)]
+    pub(super) fn with_inverse(ray: &Ray, inv: [f32; 3]) -> RayBoxes {
         let neg = |a: usize| inv[a].is_sign_negative() as usize;
         RayBoxes {
             origin: ray.origin.to_array(),

@@ -3,7 +3,7 @@
 use super::*;
 use crate::accel::leaf::{DEGENERATE, NO_PRIM};
 use crate::accel::triangle::{RayShear, TriangleHit, intersect_triangle_sheared};
-use crate::accel::{BvhNode, SplitMethod};
+use crate::accel::{BvhNode, Ray, SplitMethod};
 use crate::test_util::Lcg;
 use glam::vec3;
 
