@@ -8,9 +8,10 @@
 use glam::{Vec2, Vec3};
 use multiversion::multiversion;
 
+use super::packet_hits::PacketSceneHits;
 use super::surface::{Surface, surface_at};
 use crate::accel::{PACKET, Ray, gamma};
-use crate::trace::geometry::{Hit, PrimKind, SceneGeometry};
+use crate::trace::geometry::SceneGeometry;
 
 /// One f32 per hit of a packet.
 type Lanes = [f32; PACKET];
@@ -41,58 +42,63 @@ struct SurfaceLanes {
     uv: [Lanes; 2],
 }
 
-/// `surface_at` of each hit of `hits` (up to [`PACKET`]) on the ray of the same index
+/// `surface_at` of each hit of `hits` (up to [`PACKET`]) on the ray of the same lane
 /// in `rays`, into `out` (`None` for a miss).
 pub fn surfaces_at(
     geometry: &SceneGeometry,
     rays: &[Ray],
-    hits: &[Option<Hit>],
+    hits: &PacketSceneHits,
     interpolate_normals: bool,
     out: &mut [Option<Surface>],
 ) {
-    assert!(rays.len() <= PACKET && hits.len() == rays.len() && out.len() == rays.len());
-    let mut lanes = TriangleLanes::default();
+    assert!(rays.len() <= PACKET && out.len() == rays.len());
+    let flat = &hits.flat;
+    let flattened = flat.found & ((1 << rays.len()) - 1);
+    // The weights whole, as the packet query kept them (lanes without a hit hold
+    // junk, computed and not read).
+    let mut lanes = TriangleLanes {
+        bary: flat.bary,
+        ..TriangleLanes::default()
+    };
     let mut material = [0; PACKET];
-    let mut flattened = 0u32;
-    for (j, ((ray, hit), out)) in rays.iter().zip(hits).zip(out.iter_mut()).enumerate() {
-        *out = match hit {
-            None => None,
-            Some(
-                h @ Hit {
-                    kind: PrimKind::Triangle,
-                    instance: None,
-                    ..
-                },
-            ) => {
-                let i = h.prim as usize;
-                for (k, p) in geometry.tri_wide.triangle_at(h.lane).iter().enumerate() {
-                    for a in 0..3 {
-                        lanes.v[k][a][j] = p[a];
-                    }
-                }
-                if interpolate_normals {
-                    for (k, n) in geometry.tri_normals[i].iter().enumerate() {
-                        for a in 0..3 {
-                            lanes.normals[k][a][j] = n[a];
-                        }
-                    }
-                }
-                for (k, t) in geometry.tri_texcoords[i].iter().enumerate() {
-                    lanes.texcoords[k][0][j] = t.x;
-                    lanes.texcoords[k][1][j] = t.y;
-                }
-                for a in 0..3 {
-                    lanes.bary[a][j] = h.bary[a];
-                    lanes.dir[a][j] = ray.dir[a];
-                }
-                material[j] = geometry.tri_material[i];
-                flattened |= 1 << j;
-                // Written below, from the lanes.
-                None
+    let mut left = flattened;
+    while left != 0 {
+        let j = left.trailing_zeros() as usize;
+        left &= left - 1;
+        let i = flat.prim[j] as usize;
+        for (k, p) in geometry
+            .tri_wide
+            .triangle_at(flat.lane[j])
+            .iter()
+            .enumerate()
+        {
+            for a in 0..3 {
+                lanes.v[k][a][j] = p[a];
             }
-            Some(h) => Some(surface_at(geometry, ray, h, interpolate_normals)),
-        };
+        }
+        if interpolate_normals {
+            for (k, n) in geometry.tri_normals[i].iter().enumerate() {
+                for a in 0..3 {
+                    lanes.normals[k][a][j] = n[a];
+                }
+            }
+        }
+        for (k, t) in geometry.tri_texcoords[i].iter().enumerate() {
+            lanes.texcoords[k][0][j] = t.x;
+            lanes.texcoords[k][1][j] = t.y;
+        }
+        for a in 0..3 {
+            lanes.dir[a][j] = rays[j].dir[a];
+        }
+        material[j] = geometry.tri_material[i];
     }
+    // Misses stay `None`; flattened triangles' points are written below, from the lanes.
+    out.fill(None);
+    for (j, h) in &hits.others {
+        let j = *j as usize;
+        out[j] = Some(surface_at(geometry, &rays[j], h, interpolate_normals));
+    }
+    let mut flattened = flattened;
     if flattened == 0 {
         return;
     }

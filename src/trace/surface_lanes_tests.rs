@@ -2,6 +2,7 @@ use super::*;
 use crate::accel::{Aabb, Bvh, SplitMethod};
 use crate::scene::components::Sphere;
 use crate::test_util::Lcg as Rng;
+use crate::trace::geometry::{Hit, PrimKind};
 
 /// Signed numbers from the tests' shared stream.
 trait Signed {
@@ -143,7 +144,8 @@ fn lanes_give_surface_at_bit_for_bit() {
         let hits: Vec<Option<Hit>> = (0..len).map(|_| hit(&mut rng, &g)).collect();
         for interpolate in [false, true] {
             let mut out = vec![None; len];
-            surfaces_at(&g, &rays, &hits, interpolate, &mut out);
+            let lanes = PacketSceneHits::from_hits(&hits);
+            surfaces_at(&g, &rays, &lanes, interpolate, &mut out);
             for ((ray, hit), got) in rays.iter().zip(&hits).zip(&out) {
                 let want = hit.map(|h| surface_at(&g, ray, &h, interpolate));
                 assert_eq!(bits(got), bits(&want), "{hit:?} on {ray:?}");
