@@ -417,6 +417,26 @@ impl PacketCandidates {
 /// leaves (`group * LANES + lane`) and the hit, as [`WideBvh::closest_hit_at`] gives it.
 pub type PacketHits = [Option<(u32, u32, TriangleHit)>; PACKET];
 
+/// The least of the entry distances `t` (never NaN: `test_box` starts them at 0 with
+/// NaN-ignoring maxima) of the rays in `mask`, infinity if none: a blend and a tree of
+/// minima across the lanes, where a loop over the rays ran a chain of eight branches
+/// and NaN-checked minima per child.
+#[inline(always)]
+fn nearest_of(t: &Lanes, mask: u32) -> f32 {
+    // `a < b` picks as `minps` does; both are exact, so the tree's order is free.
+    let min = |a: f32, b: f32| if a < b { a } else { b };
+    let mut m = [0.0f32; PACKET];
+    for r in 0..PACKET {
+        m[r] = if mask & (1 << r) != 0 {
+            t[r]
+        } else {
+            f32::INFINITY
+        };
+    }
+    let m4: [f32; 4] = std::array::from_fn(|i| min(m[i], m[i + 4]));
+    min(min(m4[0], m4[2]), min(m4[1], m4[3]))
+}
+
 /// Sort key of child `c` entered at `t` (not NaN, not below zero): by t, then child.
 #[inline(always)]
 fn key(t: f32, c: usize) -> u64 {
@@ -557,14 +577,8 @@ impl WideBvh {
                 if h == 0 {
                     continue;
                 }
-                let mut nearest = f32::INFINITY;
-                for (r, &t) in t.iter().enumerate() {
-                    if h & (1 << r) != 0 {
-                        nearest = nearest.min(t);
-                    }
-                }
                 (t_near[c], hits[c]) = (t, h);
-                let k = key(nearest, c);
+                let k = key(nearest_of(&t, h), c);
                 let mut i = order.len();
                 order.push(k);
                 while i > 0 && order[i - 1] > k {

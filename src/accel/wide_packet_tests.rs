@@ -317,3 +317,25 @@ fn an_empty_tree_occludes_nothing() {
     assert_eq!(wide.occluded_packet(&[], &[]), 0);
     assert_eq!(wide.closest_packet(&r, &[1.0; 3]), [None; PACKET]);
 }
+
+#[test]
+fn nearest_of_is_the_least_entry_of_the_masked_rays() {
+    let mut rng = Lcg(23);
+    for round in 0..2_000 {
+        let t: Lanes = std::array::from_fn(|r| match (round + r) % 5 {
+            0 => 0.0,
+            1 => f32::INFINITY,
+            _ => rng.next_f32() * 10f32.powi(round as i32 % 7 - 3),
+        });
+        let mask = round as u32 % 256;
+        let want = (0..PACKET)
+            .filter(|r| mask & (1 << r) != 0)
+            .map(|r| t[r])
+            .fold(f32::INFINITY, f32::min);
+        assert_eq!(
+            nearest_of(&t, mask).to_bits(),
+            want.to_bits(),
+            "{t:?} {mask:#b}"
+        );
+    }
+}
