@@ -230,13 +230,6 @@ impl WideBvh {
         assert!(rays.len() <= PACKET, "a packet of {} rays", rays.len());
         closest_packet_within_dispatched(self, rays, t_max)
     }
-
-    /// [`Self::closest_packet_within`] of the active lanes of `rays`: lane `i` holds
-    /// `closest_hit_at(&rays.ray(i), t_max)` (none for an inactive lane). The rays are
-    /// read in lanes as they are, not transposed.
-    pub fn closest_lanes(&self, rays: &RayLanes, t_max: f32) -> HitLanes {
-        closest_lanes_dispatched(self, rays, t_max)
-    }
 }
 
 impl<'a> RayLeaves<'a> {
@@ -309,13 +302,6 @@ fn closest_packet_dispatched(wide: &WideBvh, rays: &[Ray], t_max: &[f32]) -> Hit
 #[multiversion(targets("x86_64+avx2+fma", "x86_64+sse4.2"))]
 fn closest_packet_within_dispatched(wide: &WideBvh, rays: &[Ray], t_max: f32) -> HitLanes {
     wide.closest_lanes_inlined(&RayLanes::from_rays(rays), &[t_max; PACKET])
-}
-
-/// [`WideBvh::closest_lanes`] for the best instruction set the CPU has (the bound
-/// spread to the lanes in here, as in `occluded_lanes_dispatched`).
-#[multiversion(targets("x86_64+avx2+fma", "x86_64+sse4.2"))]
-fn closest_lanes_dispatched(wide: &WideBvh, rays: &RayLanes, t_max: f32) -> HitLanes {
-    wide.closest_lanes_inlined(rays, &[t_max; PACKET])
 }
 
 #[cfg(test)]

@@ -6,7 +6,7 @@
 use arrayvec::ArrayVec;
 
 use super::geometry::{Hit, PrimKind, SceneGeometry, triangle_hit};
-use crate::accel::{HitLanes, PACKET, Ray, RayLanes, TriangleHit};
+use crate::accel::{HitLanes, PACKET, Ray, TriangleHit};
 
 /// The closest hits of up to [`PACKET`] rays: lane `r`'s is in `flat` when bit `r` of
 /// `flat.found` is set, else in `others` if listed there, else it missed.
@@ -79,28 +79,20 @@ impl SceneGeometry {
     /// (`WideBvh::closest_packet_within`, its hits kept in lanes); instances and
     /// spheres, each ray after it.
     pub fn intersect_packet_lanes(&self, rays: &[Ray], t_max: f32) -> PacketSceneHits {
-        self.intersect_lanes(&RayLanes::from_rays(rays), t_max)
-    }
-
-    /// [`Self::intersect`] (unobserved) of the active lanes of `rays` with one `t_max`,
-    /// lane `r` holding lane `r`'s hit. The flattened triangles take the lanes as one
-    /// packet (`WideBvh::closest_lanes`, its hits kept in lanes); instances and
-    /// spheres, each ray after it.
-    pub fn intersect_lanes(&self, rays: &RayLanes, t_max: f32) -> PacketSceneHits {
         let mut hits = PacketSceneHits::default();
         if !self.use_wide::<()>() {
-            for r in rays.lanes() {
-                hits.set(r, self.intersect(&rays.ray(r), t_max, &mut ()));
+            for (r, ray) in rays.iter().enumerate() {
+                hits.set(r, self.intersect(ray, t_max, &mut ()));
             }
             return hits;
         }
-        hits.flat = self.tri_wide.closest_lanes(rays, t_max);
+        hits.flat = self.tri_wide.closest_packet_within(rays, t_max);
         if !self.instanced.is_empty() || !self.sphere_bvh.nodes.is_empty() {
-            for r in rays.lanes() {
+            for (r, ray) in rays.iter().enumerate() {
                 let flat = hits.flat.found & (1 << r) != 0;
                 let t = if flat { hits.flat.t[r] } else { t_max };
                 // A closer hit beyond the flattened triangles replaces the lane's.
-                if let Some(h) = self.closest_beyond_triangles(&rays.ray(r), t, &mut ()) {
+                if let Some(h) = self.closest_beyond_triangles(ray, t, &mut ()) {
                     hits.flat.found &= !(1 << r);
                     hits.others.push((r as u32, h));
                 }

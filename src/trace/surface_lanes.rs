@@ -10,7 +10,7 @@ use multiversion::multiversion;
 
 use super::packet_hits::PacketSceneHits;
 use super::surface::{Surface, surface_at};
-use crate::accel::{PACKET, RayLanes, gamma};
+use crate::accel::{PACKET, Ray, gamma};
 use crate::trace::geometry::SceneGeometry;
 
 /// One f32 per hit of a packet.
@@ -42,23 +42,22 @@ struct SurfaceLanes {
     uv: [Lanes; 2],
 }
 
-/// `surface_at` of the hits of `hits` in lanes `0..out.len()` (up to [`PACKET`]) on
-/// the ray of the same lane in `rays`, into `out` (`None` for a miss).
+/// `surface_at` of each hit of `hits` (up to [`PACKET`]) on the ray of the same lane
+/// in `rays`, into `out` (`None` for a miss).
 pub fn surfaces_at(
     geometry: &SceneGeometry,
-    rays: &RayLanes,
+    rays: &[Ray],
     hits: &PacketSceneHits,
     interpolate_normals: bool,
     out: &mut [Option<Surface>],
 ) {
-    assert!(out.len() <= PACKET);
+    assert!(rays.len() <= PACKET && out.len() == rays.len());
     let flat = &hits.flat;
-    let flattened = flat.found & ((1 << out.len()) - 1);
-    // The weights and directions whole, as the packet query kept and read them (lanes
-    // without a hit hold junk, computed and not read).
+    let flattened = flat.found & ((1 << rays.len()) - 1);
+    // The weights whole, as the packet query kept them (lanes without a hit hold
+    // junk, computed and not read).
     let mut lanes = TriangleLanes {
         bary: flat.bary,
-        dir: rays.dir,
         ..TriangleLanes::default()
     };
     let mut material = [0; PACKET];
@@ -88,13 +87,16 @@ pub fn surfaces_at(
             lanes.texcoords[k][0][j] = t.x;
             lanes.texcoords[k][1][j] = t.y;
         }
+        for a in 0..3 {
+            lanes.dir[a][j] = rays[j].dir[a];
+        }
         material[j] = geometry.tri_material[i];
     }
     // Misses stay `None`; flattened triangles' points are written below, from the lanes.
     out.fill(None);
     for (j, h) in &hits.others {
         let j = *j as usize;
-        out[j] = Some(surface_at(geometry, &rays.ray(j), h, interpolate_normals));
+        out[j] = Some(surface_at(geometry, &rays[j], h, interpolate_normals));
     }
     let mut flattened = flattened;
     if flattened == 0 {

@@ -145,13 +145,7 @@ fn lanes_give_surface_at_bit_for_bit() {
         for interpolate in [false, true] {
             let mut out = vec![None; len];
             let lanes = PacketSceneHits::from_hits(&hits);
-            surfaces_at(
-                &g,
-                &RayLanes::from_rays(&rays),
-                &lanes,
-                interpolate,
-                &mut out,
-            );
+            surfaces_at(&g, &rays, &lanes, interpolate, &mut out);
             for ((ray, hit), got) in rays.iter().zip(&hits).zip(&out) {
                 let want = hit.map(|h| surface_at(&g, ray, &h, interpolate));
                 assert_eq!(bits(got), bits(&want), "{hit:?} on {ray:?}");

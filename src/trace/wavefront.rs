@@ -19,7 +19,7 @@ use super::shade_lanes::{LaneModel, shade_chunks_in_lanes};
 pub use super::shadow::{CHUNK, ShadowPacket, ShadowPackets, ShadowQueue, ShadowRay};
 use super::surface::{SHADOW_EPSILON, Surface, offset_ray_origin_towards, surface_at};
 use super::surface_lanes::surfaces_at;
-use crate::accel::{Ray, RayLanes};
+use crate::accel::Ray;
 use crate::sampling::Sampler;
 use crate::scene::Settings;
 use crate::shade::{Model, Shading, ShadingInput, WithModel};
@@ -163,7 +163,7 @@ fn closest_hits<O: HitObserver>(
 }
 
 /// [`closest_hits`] unobserved, with consecutive rays (of neighbouring pixels) traced
-/// as packets in lanes (`SceneGeometry::intersect_lanes`): the same hits.
+/// as packets (`SceneGeometry::intersect_packet_lanes`): the same hits.
 fn closest_hits_in_packets(
     geometry: &SceneGeometry,
     rays: &[QueuedRay],
@@ -175,27 +175,19 @@ fn closest_hits_in_packets(
     // filled on one thread first (it keeps its length from depth to depth).
     surfaces.truncate(rays.len());
     surfaces.resize_with(rays.len(), || None);
-    // Packets put in lanes together before any is traced: each lane is written a float
-    // at a time, and the query reads it back as a vector. Read right after its writes,
-    // the vector waited for them to leave the store buffer; read after the group's other
-    // writes and traversals, it comes from the cache.
-    const GROUP: usize = 8;
     surfaces
-        .par_chunks_mut(PACKET * GROUP)
-        .zip(rays.par_chunks(PACKET * GROUP))
-        .with_min_len(CHUNK / (PACKET * GROUP))
+        .par_chunks_mut(PACKET)
+        .zip(rays.par_chunks(PACKET))
+        .with_min_len(CHUNK / PACKET)
         .for_each(|(surfaces, rays)| {
-            // Lanes past the rays stay zero, never read.
-            let mut packets = [RayLanes::default(); GROUP];
-            for (packet, rays) in packets.iter_mut().zip(rays.chunks(PACKET)) {
-                for (r, q) in rays.iter().enumerate() {
-                    packet.set(r, &q.ray);
-                }
+            // Only the packet's rays are copied (the rest stay zero, never read).
+            let mut packet = [Ray::new(Vec3::ZERO, Vec3::ZERO); PACKET];
+            for (p, q) in packet.iter_mut().zip(rays) {
+                *p = q.ray;
             }
-            for (packet, surfaces) in packets.iter().zip(surfaces.chunks_mut(PACKET)) {
-                let hits = geometry.intersect_lanes(packet, f32::INFINITY);
-                surfaces_at(geometry, packet, &hits, interpolate, surfaces);
-            }
+            let n = rays.len();
+            let hits = geometry.intersect_packet_lanes(&packet[..n], f32::INFINITY);
+            surfaces_at(geometry, &packet[..n], &hits, interpolate, surfaces);
         });
 }
 
