@@ -423,6 +423,10 @@ pub type PacketHits = [Option<(u32, u32, TriangleHit)>; PACKET];
 /// and NaN-checked minima per child.
 #[inline(always)]
 fn nearest_of(t: &Lanes, mask: u32) -> f32 {
+    // One ray (incoherent packets, mostly): its own entry, no tree.
+    if mask.is_power_of_two() {
+        return t[mask.trailing_zeros() as usize % PACKET];
+    }
     // `a < b` picks as `minps` does; both are exact, so the tree's order is free.
     let min = |a: f32, b: f32| if a < b { a } else { b };
     let mut m = [0.0f32; PACKET];
