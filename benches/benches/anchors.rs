@@ -65,7 +65,7 @@ enum Peer<'a> {
     /// Embree's 16-ray packets over consecutive rays of a set (what packets buy).
     Embree16(&'a EmbreeScene<'a>),
     /// The 8-wide BVH's packets of 8 consecutive rays (`WideBvh::occluded_packet`,
-    /// `WideBvh::closest_packet`).
+    /// `WideBvh::closest_packet_within`).
     Glint8(&'a WideBvh),
     TinyBvh(&'a TinyBvh8),
 }
@@ -147,15 +147,15 @@ impl Peer<'_> {
                     .map(|c| wide.occluded_packet(c, &t_max[..c.len()]).count_ones())
                     .sum()
             }
-            Peer::Glint8(wide) => {
-                let t_max = [f32::INFINITY; PACKET];
-                rays.chunks(PACKET)
-                    .map(|c| {
-                        let hits = wide.closest_packet(c, &t_max[..c.len()]);
-                        hits.iter().filter(|h| h.is_some()).count() as u32
-                    })
-                    .sum()
-            }
+            // The render's entry: one bound, the hits kept in lanes.
+            Peer::Glint8(wide) => rays
+                .chunks(PACKET)
+                .map(|c| {
+                    wide.closest_packet_within(c, f32::INFINITY)
+                        .found
+                        .count_ones()
+                })
+                .sum(),
             Peer::TinyBvh(b) => count_hits(
                 rays,
                 shadow,

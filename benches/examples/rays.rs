@@ -4,7 +4,7 @@
 //! mesh, the BVH and the rays is left out of the figure.
 //!   rays [TORUS_N] [RAYS]   (defaults 158, the 100k torus, and 65536 rays)
 //! With `GLINT_RAYS_PACKETS` set, every set goes 8 consecutive rays at a time through
-//! `WideBvh::occluded_packet` or `closest_packet` (as the render traces its rays).
+//! `WideBvh::occluded_packet` or `closest_packet_within` (as the render traces its rays).
 
 use std::hint::black_box;
 
@@ -26,8 +26,10 @@ fn trace_rays(wide: &WideBvh, rays: &[Ray], shadow: bool) -> u32 {
                 if shadow {
                     wide.occluded_packet(c, t_max).count_ones()
                 } else {
-                    let hits = wide.closest_packet(c, t_max);
-                    hits.iter().filter(|h| h.is_some()).count() as u32
+                    // The render's entry: one bound, the hits kept in lanes.
+                    wide.closest_packet_within(c, f32::INFINITY)
+                        .found
+                        .count_ones()
                 }
             })
             .sum();

@@ -13,7 +13,8 @@
 //! - `wide_collapse`: the choice of the wide nodes and leaves, by a surface-area cost.
 //! - `wide_query`: the wide BVH's closest-hit and any-hit queries, one clone per instruction set.
 //! - `wide_packet`: the queries for packets of up to eight rays, one ray per SIMD lane.
-//! - `ray_lanes`: a packet's rays side by side ([`RayLanes`]), as those queries read them.
+//! - `ray_lanes`: a packet's rays side by side ([`RayLanes`]), as those queries read them,
+//!   and their closest hits ([`HitLanes`]), as the closest-hit query keeps them.
 //! - [`leaf`]: the wide BVH's leaf triangles in SIMD groups, with a vectorised prefilter.
 //! - [`instance`]: a two-level BVH, one wide BVH per mesh shared by its instances.
 
@@ -37,7 +38,7 @@ mod wide_query;
 pub use aabb::Aabb;
 pub use bvh::{Bvh, BvhNode, SplitMethod};
 pub use instance::{Instance, TwoLevelBvh};
-pub use ray_lanes::RayLanes;
+pub use ray_lanes::{HitLanes, RayLanes};
 pub use sphere::intersect_sphere;
 pub use traverse::{TraversalStats, TraversalVisitor};
 pub use triangle::{RayShear, TriangleHit, intersect_triangle, intersect_triangle_sheared};

@@ -1,10 +1,12 @@
 //! Up to [`PACKET`] rays side by side (SoA), one lane per ray, with a mask of the lanes
 //! holding one: the form the packet queries read, which a producer that has its rays
-//! in lanes already (the render's shading) fills with whole-lane writes.
+//! in lanes already (the render's shading) fills with whole-lane writes; and their
+//! closest hits side by side ([`HitLanes`]), as the closest-hit packet query keeps
+//! them and the shading reads them.
 
 use glam::Vec3;
 
-use super::{PACKET, Ray};
+use super::{PACKET, PacketHits, Ray, TriangleHit};
 
 /// One f32 per lane.
 pub type Lanes = [f32; PACKET];
@@ -64,6 +66,57 @@ impl RayLanes {
     }
 }
 
+/// Each lane's closest hit of a packet on triangles of a wide BVH: lane `r` holds one
+/// when bit `r` of `found` is set; other lanes may hold anything (never read as hits).
+/// Kept field by field (one lane written at a time, never copied whole mid-query): a
+/// whole hit written in 4-byte pieces and read back in 8-byte ones stalled.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct HitLanes {
+    /// Ray parameter of each hit (`TriangleHit::t`).
+    pub t: Lanes,
+    /// Barycentric weights of each hit's vertices (`TriangleHit::{b0, b1, b2}`).
+    pub bary: [Lanes; 3],
+    /// Index of each hit triangle, as the caller numbered it.
+    pub prim: [u32; PACKET],
+    /// Where each hit triangle sits in the leaves (`group * LANES + lane`), as
+    /// `WideBvh::closest_hit_at` reports it.
+    pub lane: [u32; PACKET],
+    /// The lanes holding a hit.
+    pub found: u32,
+}
+
+impl HitLanes {
+    /// Puts hit `h` on triangle `prim` at leaf lane `lane` in lane `r` (one lane's
+    /// stores, nothing read back) and marks the lane found.
+    #[inline(always)]
+    pub fn set(&mut self, r: usize, prim: u32, lane: u32, h: &TriangleHit) {
+        self.t[r] = h.t;
+        [self.bary[0][r], self.bary[1][r], self.bary[2][r]] = [h.b0, h.b1, h.b2];
+        self.prim[r] = prim;
+        self.lane[r] = lane;
+        self.found |= 1 << r;
+    }
+
+    /// Lane `r`'s hit as `(prim, lane, hit)`, if it holds one.
+    #[inline(always)]
+    pub fn get(&self, r: usize) -> Option<(u32, u32, TriangleHit)> {
+        (self.found & (1 << r) != 0).then(|| {
+            let h = TriangleHit {
+                t: self.t[r],
+                b0: self.bary[0][r],
+                b1: self.bary[1][r],
+                b2: self.bary[2][r],
+            };
+            (self.prim[r], self.lane[r], h)
+        })
+    }
+
+    /// Every lane's hit, one entry per lane.
+    pub fn to_packet_hits(&self) -> PacketHits {
+        std::array::from_fn(|r| self.get(r))
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -88,5 +141,26 @@ mod tests {
         holes.set(1, &rays[4]);
         assert_eq!(holes.lanes().collect::<Vec<_>>(), [1, 6]);
         assert_eq!(holes.ray(6), rays[2]);
+    }
+
+    #[test]
+    fn hits_come_back_from_their_lanes() {
+        let h = |i: u32| TriangleHit {
+            t: i as f32 + 0.5,
+            b0: 0.25,
+            b1: -0.0,
+            b2: i as f32,
+        };
+        let mut lanes = HitLanes::default();
+        lanes.set(6, 11, 40, &h(1));
+        lanes.set(2, 7, 3, &h(2));
+        // A lane set twice keeps its last hit.
+        lanes.set(6, 12, 41, &h(3));
+        assert_eq!(lanes.found, 0b100_0100);
+        let mut want = [None; PACKET];
+        want[2] = Some((7, 3, h(2)));
+        want[6] = Some((12, 41, h(3)));
+        assert_eq!(lanes.to_packet_hits(), want);
+        assert_eq!(lanes.get(6).unwrap().2.b1.to_bits(), (-0.0f32).to_bits());
     }
 }

@@ -30,7 +30,7 @@ use super::ray_lanes::Lanes;
 use super::triangle::{RayShear, TriangleHit, intersect_triangle_flagged};
 use super::wide_node::{EMPTY, WIDTH, WideNode, leaf_lanes};
 use super::wide_query::three_ulps_up;
-use super::{BOX_MARGIN, Ray, RayLanes, WideBvh};
+use super::{BOX_MARGIN, HitLanes, RayLanes, WideBvh};
 
 /// Rays per packet: one AVX2 register of f32.
 pub const PACKET: usize = 8;
@@ -100,20 +100,6 @@ struct Shear {
 }
 
 impl PacketRays {
-    /// The constants of `rays` (1 to `PACKET`) with bounds `t_max`.
-    #[inline(always)]
-    pub(super) fn new(rays: &[Ray], t_max: &[f32]) -> PacketRays {
-        assert!(
-            (1..=PACKET).contains(&rays.len()) && t_max.len() == rays.len(),
-            "a packet of {} rays and {} bounds",
-            rays.len(),
-            t_max.len()
-        );
-        let mut bounds = [0.0; PACKET];
-        bounds[..t_max.len()].copy_from_slice(t_max);
-        PacketRays::from_lanes(&RayLanes::from_rays(rays), &bounds)
-    }
-
     /// The constants of the active rays of `rays` with bounds `t_max`, read lane by
     /// lane: no transposition (inactive lanes compute junk, never read).
     #[inline(always)]
@@ -360,7 +346,8 @@ impl PacketRays {
 
     /// Tests rays `rays` (of sub-packet `s`) against the leaf at group `group` with the
     /// lane count `count`, keeping in `best` each ray's least (t, index) hit as
-    /// `ClosestLeaves` does, and lowering its cull distance and bound with it.
+    /// `ClosestLeaves` does (in its lane, field by field), and lowering its cull
+    /// distance and bound with it.
     #[inline(always)]
     fn closest_in_leaf(
         &mut self,
@@ -368,7 +355,7 @@ impl PacketRays {
         (group, count): (usize, u32),
         s: &Shear,
         rays: u32,
-        best: &mut PacketHits,
+        best: &mut HitLanes,
         limit: &Lanes,
     ) {
         let (count, degenerate) = leaf_count(count);
@@ -387,10 +374,11 @@ impl PacketRays {
                         continue;
                     };
                     let p = wide.prim_at(group + i, l);
-                    if best[r].is_none_or(|(bp, _, bh)| h.t < bh.t || (h.t == bh.t && p < bp)) {
+                    let first = best.found & (1 << r) == 0;
+                    if first || h.t < best.t[r] || (h.t == best.t[r] && p < best.prim[r]) {
                         self.cull[r] = h.t;
                         self.bound[r] = three_ulps_up(h.t).min(limit[r]);
-                        best[r] = Some((p, ((group + i) * LANES + l) as u32, h));
+                        best.set(r, p, ((group + i) * LANES + l) as u32, &h);
                     }
                 }
             }
@@ -428,6 +416,30 @@ impl PacketCandidates {
 /// Each ray's closest hit in a packet: the triangle's index, where it sits in the
 /// leaves (`group * LANES + lane`) and the hit, as [`WideBvh::closest_hit_at`] gives it.
 pub type PacketHits = [Option<(u32, u32, TriangleHit)>; PACKET];
+
+/// The least of the entry distances `t` (never NaN: `test_box` starts them at 0 with
+/// NaN-ignoring maxima) of the rays in `mask`, infinity if none: a blend and a tree of
+/// minima across the lanes, where a loop over the rays ran a chain of eight branches
+/// and NaN-checked minima per child.
+#[inline(always)]
+fn nearest_of(t: &Lanes, mask: u32) -> f32 {
+    // One ray (incoherent packets, mostly): its own entry, no tree.
+    if mask.is_power_of_two() {
+        return t[mask.trailing_zeros() as usize % PACKET];
+    }
+    // `a < b` picks as `minps` does; both are exact, so the tree's order is free.
+    let min = |a: f32, b: f32| if a < b { a } else { b };
+    let mut m = [0.0f32; PACKET];
+    for r in 0..PACKET {
+        m[r] = if mask & (1 << r) != 0 {
+            t[r]
+        } else {
+            f32::INFINITY
+        };
+    }
+    let m4: [f32; 4] = std::array::from_fn(|i| min(m[i], m[i + 4]));
+    min(min(m4[0], m4[2]), min(m4[1], m4[3]))
+}
 
 /// Sort key of child `c` entered at `t` (not NaN, not below zero): by t, then child.
 #[inline(always)]
@@ -511,14 +523,15 @@ impl WideBvh {
 }
 
 impl WideBvh {
-    /// [`Self::closest_packet`] compiled for whatever target features the caller has.
+    /// [`Self::closest_lanes`] compiled for whatever target features the caller has:
+    /// the closest hit of each active lane of `rays` within its bound `t_max`.
     #[inline(always)]
-    pub(super) fn closest_packet_inlined(&self, rays: &[Ray], t_max: &[f32]) -> PacketHits {
-        let mut best: PacketHits = [None; PACKET];
-        if self.nodes.is_empty() || rays.is_empty() {
+    pub(super) fn closest_lanes_inlined(&self, rays: &RayLanes, t_max: &Lanes) -> HitLanes {
+        let mut best = HitLanes::default();
+        if self.nodes.is_empty() || rays.active == 0 {
             return best;
         }
-        let mut p = PacketRays::new(rays, t_max);
+        let mut p = PacketRays::from_lanes(rays, t_max);
         let limit = p.cull;
         let mut todo = p.active;
         while todo != 0 {
@@ -541,7 +554,7 @@ impl WideBvh {
         s: &Shear,
         rays: u32,
         limit: &Lanes,
-        best: &mut PacketHits,
+        best: &mut HitLanes,
     ) {
         let mut stack: ArrayVec<(u32, u32, Lanes), STACK_SIZE> = ArrayVec::new();
         let mut next = Some((0u32, rays, [0.0f32; PACKET]));
@@ -568,14 +581,8 @@ impl WideBvh {
                 if h == 0 {
                     continue;
                 }
-                let mut nearest = f32::INFINITY;
-                for (r, &t) in t.iter().enumerate() {
-                    if h & (1 << r) != 0 {
-                        nearest = nearest.min(t);
-                    }
-                }
                 (t_near[c], hits[c]) = (t, h);
-                let k = key(nearest, c);
+                let k = key(nearest_of(&t, h), c);
                 let mut i = order.len();
                 order.push(k);
                 while i > 0 && order[i - 1] > k {

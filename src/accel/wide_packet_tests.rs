@@ -2,7 +2,7 @@
 
 use super::*;
 use crate::accel::triangle::TriangleHit;
-use crate::accel::{Aabb, Bvh, SplitMethod};
+use crate::accel::{Aabb, Bvh, Ray, SplitMethod};
 use crate::test_util::Lcg;
 use glam::vec3;
 
@@ -199,19 +199,24 @@ fn check_closest(wide: &WideBvh, rays: &[(Ray, f32)]) -> usize {
     for chunk in packets_of_1_to_8(rays) {
         let (r, t): (Vec<Ray>, Vec<f32>) = chunk.iter().copied().unzip();
         let got = wide.closest_packet(&r, &t);
-        assert_eq!(
-            got,
-            wide.closest_packet_inlined(&r, &t),
-            "the baseline build"
-        );
+        let mut bounds = [0.0; PACKET];
+        bounds[..t.len()].copy_from_slice(&t);
+        let lanes = wide.closest_lanes_inlined(&RayLanes::from_rays(&r), &bounds);
+        assert_eq!(got, lanes.to_packet_hits(), "the baseline build");
+        assert_eq!(lanes.found >> chunk.len(), 0, "hits past the packet");
         assert!(
             got[chunk.len()..].iter().all(Option::is_none),
             "hits past the packet"
         );
+        // And the public query in lanes, with one bound for every ray.
+        let within = wide.closest_packet_within(&r, t[0]);
+        assert_eq!(within.found >> chunk.len(), 0, "hits past the packet");
         for (i, (ray, t_max)) in chunk.iter().enumerate() {
             let want = wide.closest_hit_at(ray, *t_max);
             assert_eq!(bits(&got[i]), bits(&want), "{ray:?} t_max {t_max}");
             hits += want.is_some() as usize;
+            let want = wide.closest_hit_at(ray, t[0]);
+            assert_eq!(bits(&within.get(i)), bits(&want), "{ray:?} t_max {}", t[0]);
         }
     }
     hits
@@ -311,4 +316,26 @@ fn an_empty_tree_occludes_nothing() {
     assert_eq!(wide.occluded_packet(&r, &[1.0; 3]), 0);
     assert_eq!(wide.occluded_packet(&[], &[]), 0);
     assert_eq!(wide.closest_packet(&r, &[1.0; 3]), [None; PACKET]);
+}
+
+#[test]
+fn nearest_of_is_the_least_entry_of_the_masked_rays() {
+    let mut rng = Lcg(23);
+    for round in 0..2_000 {
+        let t: Lanes = std::array::from_fn(|r| match (round + r) % 5 {
+            0 => 0.0,
+            1 => f32::INFINITY,
+            _ => rng.next_f32() * 10f32.powi(round as i32 % 7 - 3),
+        });
+        let mask = round as u32 % 256;
+        let want = (0..PACKET)
+            .filter(|r| mask & (1 << r) != 0)
+            .map(|r| t[r])
+            .fold(f32::INFINITY, f32::min);
+        assert_eq!(
+            nearest_of(&t, mask).to_bits(),
+            want.to_bits(),
+            "{t:?} {mask:#b}"
+        );
+    }
 }

@@ -18,7 +18,7 @@ use super::leaf::{LANES, RayLeaf, groups_for, leaf_count};
 use super::triangle::{RayShear, TriangleHit};
 use super::wide_node::RayBoxes;
 use super::wide_packet::{PACKET, PacketHits};
-use super::{Ray, RayLanes, WideBvh};
+use super::{HitLanes, Ray, RayLanes, WideBvh};
 
 /// What a query does at each leaf the traversal reaches.
 pub(super) trait LeafVisitor {
@@ -257,7 +257,21 @@ impl WideBvh {
     /// For up to [`PACKET`](super::PACKET) rays at once (a packet; see
     /// `accel::wide_packet`): entry `i` is exactly `closest_hit_at(&rays[i], t_max[i])`.
     pub fn closest_packet(&self, rays: &[Ray], t_max: &[f32]) -> PacketHits {
-        closest_packet_dispatched(self, rays, t_max)
+        assert!(
+            rays.len() <= PACKET && t_max.len() == rays.len(),
+            "a packet of {} rays and {} bounds",
+            rays.len(),
+            t_max.len()
+        );
+        closest_packet_dispatched(self, rays, t_max).to_packet_hits()
+    }
+
+    /// [`Self::closest_packet`] of `rays`, all bounded by `t_max`, in lanes: lane `i`
+    /// holds `closest_hit_at(&rays[i], t_max)`. The rays are put in lanes and the bound
+    /// spread to them inside the dispatched clone.
+    pub fn closest_packet_within(&self, rays: &[Ray], t_max: f32) -> HitLanes {
+        assert!(rays.len() <= PACKET, "a packet of {} rays", rays.len());
+        closest_packet_within_dispatched(self, rays, t_max)
     }
 }
 
@@ -331,8 +345,17 @@ fn occluded_lanes_dispatched(wide: &WideBvh, rays: &RayLanes, t_max: f32) -> u32
 
 /// [`WideBvh::closest_packet`] for the best instruction set the CPU has.
 #[multiversion(targets("x86_64+avx2+fma", "x86_64+sse4.2"))]
-fn closest_packet_dispatched(wide: &WideBvh, rays: &[Ray], t_max: &[f32]) -> PacketHits {
-    wide.closest_packet_inlined(rays, t_max)
+fn closest_packet_dispatched(wide: &WideBvh, rays: &[Ray], t_max: &[f32]) -> HitLanes {
+    let mut bounds = [0.0; PACKET];
+    bounds[..t_max.len()].copy_from_slice(t_max);
+    wide.closest_lanes_inlined(&RayLanes::from_rays(rays), &bounds)
+}
+
+/// [`WideBvh::closest_packet_within`] for the best instruction set the CPU has (the
+/// bound spread to the lanes in here, as in `occluded_lanes_dispatched`).
+#[multiversion(targets("x86_64+avx2+fma", "x86_64+sse4.2"))]
+fn closest_packet_within_dispatched(wide: &WideBvh, rays: &[Ray], t_max: f32) -> HitLanes {
+    wide.closest_lanes_inlined(&RayLanes::from_rays(rays), &[t_max; PACKET])
 }
 
 #[cfg(test)]

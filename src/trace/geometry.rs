@@ -16,8 +16,8 @@ use crate::accel::leaf::NO_PRIM;
 use crate::accel::sphere::{sphere_roots, sphere_uv};
 use crate::accel::triangle::{RayShear, TriangleHit, intersect_triangle_sheared};
 use crate::accel::{
-    Aabb, Bvh, Instance, PACKET, Ray, RayLanes, SplitMethod, TraversalStats, TraversalVisitor,
-    TwoLevelBvh, WideBvh, gamma, intersect_sphere,
+    Aabb, Bvh, Instance, Ray, RayLanes, SplitMethod, TraversalStats, TraversalVisitor, TwoLevelBvh,
+    WideBvh, gamma, intersect_sphere,
 };
 use crate::scene::{Acceleration, BvhSplit, Mesh, MeshData, Settings, Sphere, Transform};
 use crate::stats::{RenderStats, Stage};
@@ -301,7 +301,7 @@ impl SceneGeometry {
     /// Whether queries observed by `V` traverse the wide triangle BVH: unobserved ones,
     /// and observed ones when the binary tree was dropped (they then still find the
     /// render's hits, but see no triangle nodes).
-    fn use_wide<V: GeometryVisitor>(&self) -> bool {
+    pub(super) fn use_wide<V: GeometryVisitor>(&self) -> bool {
         !self.tri_wide.nodes.is_empty() && (!V::OBSERVES || self.tri_bvh.nodes.is_empty())
     }
 
@@ -355,10 +355,22 @@ impl SceneGeometry {
     fn intersect_beyond_triangles<V: GeometryVisitor>(
         &self,
         ray: &Ray,
-        mut best: Option<Hit>,
+        best: Option<Hit>,
+        t_max: f32,
+        visitor: &mut V,
+    ) -> Option<Hit> {
+        self.closest_beyond_triangles(ray, t_max, visitor).or(best)
+    }
+
+    /// The closest hit in (0, t_max) on an instance or a sphere, if any.
+    #[inline]
+    pub(super) fn closest_beyond_triangles<V: GeometryVisitor>(
+        &self,
+        ray: &Ray,
         mut t_max: f32,
         visitor: &mut V,
     ) -> Option<Hit> {
+        let mut best = None;
         // After the flattened triangles and strictly closer: of hits at the same t,
         // flattened triangles win over instances.
         if !self.instanced.is_empty()
@@ -388,40 +400,6 @@ impl SceneGeometry {
             }
         }
         best
-    }
-
-    /// [`Self::intersect`] (unobserved) of up to [`PACKET`] rays with one `t_max`, into
-    /// `hits` (as long as `rays`). The flattened triangles take the rays as one packet
-    /// (`WideBvh::closest_packet`); instances and spheres, each ray after it.
-    pub fn intersect_packet(&self, rays: &[Ray], t_max: f32, hits: &mut [Option<Hit>]) {
-        if !self.use_wide::<()>() {
-            for (ray, hit) in rays.iter().zip(hits) {
-                *hit = self.intersect(ray, t_max, &mut ());
-            }
-            return;
-        }
-        let found = self
-            .tri_wide
-            .closest_packet(rays, &[t_max; PACKET][..rays.len()]);
-        let best = |found: Option<(u32, u32, TriangleHit)>| {
-            found.map(|(prim, lane, h)| Hit {
-                lane,
-                ..triangle_hit(prim, &h)
-            })
-        };
-        // Two loops, the test made once: the triangles-only one neither reads the rays nor
-        // branches per ray.
-        if !self.instanced.is_empty() || !self.sphere_bvh.nodes.is_empty() {
-            for ((ray, hit), found) in rays.iter().zip(hits).zip(found) {
-                let best = best(found);
-                let t = best.map_or(t_max, |h| h.t);
-                *hit = self.intersect_beyond_triangles(ray, best, t, &mut ());
-            }
-        } else {
-            for (hit, found) in hits.iter_mut().zip(found) {
-                *hit = best(found);
-            }
-        }
     }
 
     /// Whether anything lies on the ray in (0, t_max).
@@ -456,8 +434,9 @@ impl SceneGeometry {
                 }))
     }
 
-    /// [`Self::occluded`] (unobserved) of up to [`PACKET`] rays with one `t_max`: bit `i`
-    /// set when `rays[i]` is occluded ([`Self::occluded_lanes`] of them in lanes).
+    /// [`Self::occluded`] (unobserved) of up to [`PACKET`](crate::accel::PACKET) rays
+    /// with one `t_max`: bit `i` set when `rays[i]` is occluded ([`Self::occluded_lanes`]
+    /// of them in lanes).
     pub fn occluded_packet(&self, rays: &[Ray], t_max: f32) -> u32 {
         self.occluded_lanes(&RayLanes::from_rays(rays), t_max)
     }
@@ -665,7 +644,7 @@ impl SceneGeometry {
 }
 
 /// The scene's hit record of triangle `prim`.
-fn triangle_hit(prim: u32, h: &TriangleHit) -> Hit {
+pub(super) fn triangle_hit(prim: u32, h: &TriangleHit) -> Hit {
     Hit {
         t: h.t,
         prim,

@@ -10,6 +10,7 @@ mod lane_models;
 pub mod lights;
 pub mod log;
 pub mod materials;
+pub mod packet_hits;
 pub mod plan;
 mod shade_lanes;
 pub mod shadow;

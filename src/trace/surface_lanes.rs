@@ -8,10 +8,11 @@
 
 use multiversion::multiversion;
 
+use super::packet_hits::PacketSceneHits;
 use super::surface::surface_at;
 use super::surface_queue::SurfaceBlock;
 use crate::accel::{PACKET, Ray, gamma};
-use crate::trace::geometry::{Hit, PrimKind, SceneGeometry};
+use crate::trace::geometry::SceneGeometry;
 
 /// One f32 per hit of a packet.
 type Lanes = [f32; PACKET];
@@ -42,66 +43,63 @@ pub(super) struct SurfaceLanes {
     pub(super) uv: [Lanes; 2],
 }
 
-/// `surface_at` of each hit of `hits` (up to [`PACKET`]) on the ray of the same index
+/// `surface_at` of each hit of `hits` (up to [`PACKET`]) on the ray of the same lane
 /// in `rays`, into lane of the same index of `out` (its hit bits: the hits).
 pub(super) fn surfaces_at(
     geometry: &SceneGeometry,
     rays: &[Ray],
-    hits: &[Option<Hit>],
+    hits: &PacketSceneHits,
     interpolate_normals: bool,
     out: &mut SurfaceBlock,
 ) {
-    assert!(rays.len() <= PACKET && hits.len() == rays.len());
-    let mut lanes = TriangleLanes::default();
-    let mut flattened = 0u32;
-    // Hits of other kinds, made after the flattened triangles' lanes are written whole.
-    let mut others = 0u32;
-    for (j, (ray, hit)) in rays.iter().zip(hits).enumerate() {
-        match hit {
-            None => {}
-            Some(
-                h @ Hit {
-                    kind: PrimKind::Triangle,
-                    instance: None,
-                    ..
-                },
-            ) => {
-                let i = h.prim as usize;
-                for (k, p) in geometry.tri_wide.triangle_at(h.lane).iter().enumerate() {
-                    for a in 0..3 {
-                        lanes.v[k][a][j] = p[a];
-                    }
-                }
-                if interpolate_normals {
-                    for (k, n) in geometry.tri_normals[i].iter().enumerate() {
-                        for a in 0..3 {
-                            lanes.normals[k][a][j] = n[a];
-                        }
-                    }
-                }
-                for (k, t) in geometry.tri_texcoords[i].iter().enumerate() {
-                    lanes.texcoords[k][0][j] = t.x;
-                    lanes.texcoords[k][1][j] = t.y;
-                }
-                for a in 0..3 {
-                    lanes.bary[a][j] = h.bary[a];
-                    lanes.dir[a][j] = ray.dir[a];
-                }
-                out.material[j] = geometry.tri_material[i];
-                flattened |= 1 << j;
+    assert!(rays.len() <= PACKET);
+    let flat = &hits.flat;
+    let flattened = flat.found & ((1 << rays.len()) - 1);
+    // The weights whole, as the packet query kept them (lanes without a hit hold
+    // junk, computed and not read).
+    let mut lanes = TriangleLanes {
+        bary: flat.bary,
+        ..TriangleLanes::default()
+    };
+    let mut left = flattened;
+    while left != 0 {
+        let j = left.trailing_zeros() as usize;
+        left &= left - 1;
+        let i = flat.prim[j] as usize;
+        for (k, p) in geometry
+            .tri_wide
+            .triangle_at(flat.lane[j])
+            .iter()
+            .enumerate()
+        {
+            for a in 0..3 {
+                lanes.v[k][a][j] = p[a];
             }
-            Some(_) => others |= 1 << j,
         }
+        if interpolate_normals {
+            for (k, n) in geometry.tri_normals[i].iter().enumerate() {
+                for a in 0..3 {
+                    lanes.normals[k][a][j] = n[a];
+                }
+            }
+        }
+        for (k, t) in geometry.tri_texcoords[i].iter().enumerate() {
+            lanes.texcoords[k][0][j] = t.x;
+            lanes.texcoords[k][1][j] = t.y;
+        }
+        for a in 0..3 {
+            lanes.dir[a][j] = rays[j].dir[a];
+        }
+        out.material[j] = geometry.tri_material[i];
     }
     out.hit = flattened;
     if flattened != 0 {
         triangle_surfaces(&lanes, interpolate_normals, &mut out.lanes);
     }
-    while others != 0 {
-        let j = others.trailing_zeros() as usize;
-        others &= others - 1;
-        let surface = hits[j].map(|h| surface_at(geometry, &rays[j], &h, interpolate_normals));
-        out.set(j, surface);
+    // Hits of other kinds after the flattened triangles' lanes, which are written whole.
+    for (j, h) in &hits.others {
+        let j = *j as usize;
+        out.set(j, Some(surface_at(geometry, &rays[j], h, interpolate_normals)));
     }
 }
 

@@ -4,6 +4,7 @@ use super::*;
 use crate::accel::{Aabb, Bvh, SplitMethod};
 use crate::scene::components::Sphere;
 use crate::test_util::Lcg as Rng;
+use crate::trace::geometry::{Hit, PrimKind};
 use crate::trace::surface::Surface;
 
 /// Signed numbers from the tests' shared stream.
@@ -147,7 +148,8 @@ fn lanes_give_surface_at_bit_for_bit() {
             .collect();
         let hits: Vec<Option<Hit>> = (0..len).map(|_| hit(&mut rng, &g)).collect();
         for interpolate in [false, true] {
-            surfaces_at(&g, &rays, &hits, interpolate, &mut out);
+            let lanes = PacketSceneHits::from_hits(&hits);
+            surfaces_at(&g, &rays, &lanes, interpolate, &mut out);
             for (j, (ray, hit)) in rays.iter().zip(&hits).enumerate() {
                 let want = hit.map(|h| surface_at(&g, ray, &h, interpolate));
                 assert_eq!(bits(&out.get(j)), bits(&want), "{hit:?} on {ray:?}");

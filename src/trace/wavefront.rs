@@ -173,7 +173,7 @@ fn closest_hits<O: HitObserver>(
 }
 
 /// [`closest_hits`] unobserved, with consecutive rays (of neighbouring pixels) traced
-/// as packets (`SceneGeometry::intersect_packet`): the same hits.
+/// as packets (`SceneGeometry::intersect_packet_lanes`): the same hits.
 fn closest_hits_in_packets(
     geometry: &SceneGeometry,
     rays: &[QueuedRay],
@@ -197,10 +197,9 @@ fn closest_hits_in_packets(
             for (p, q) in packet.iter_mut().zip(rays) {
                 *p = q.ray;
             }
-            let mut hits = [None; PACKET];
             let n = rays.len();
-            geometry.intersect_packet(&packet[..n], f32::INFINITY, &mut hits[..n]);
-            surfaces_at(geometry, &packet[..n], &hits[..n], interpolate, surfaces);
+            let hits = geometry.intersect_packet_lanes(&packet[..n], f32::INFINITY);
+            surfaces_at(geometry, &packet[..n], &hits, interpolate, surfaces);
         });
 }
 
