@@ -97,9 +97,9 @@ pub(super) fn surfaces_at(
         triangle_surfaces(&lanes, interpolate_normals, &mut out.lanes);
     }
     // Hits of other kinds after the flattened triangles' lanes, which are written whole.
-    for (j, h) in &hits.others {
-        let j = *j as usize;
-        out.set(j, Some(surface_at(geometry, &rays[j], h, interpolate_normals)));
+    for &(j, h) in &hits.others {
+        let surface = surface_at(geometry, &rays[j as usize], &h, interpolate_normals);
+        out.set(j as usize, Some(surface));
     }
 }
 
