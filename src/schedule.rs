@@ -7,7 +7,7 @@
 //! for each pass (sample index)                                   run_passes
 //!   for each region of at most REGION_PIXELS pixels              run_pass
 //!     RenderPass:  generate_camera_samples -> trace_wavefronts
-//!                  -> accumulate_moments -> accumulate_film
+//!                  -> accumulate_film
 //!     for each depth level while rays remain                     trace_wavefronts
 //!       Bounce:    intersect_rays -> shade_hits -> trace_shadow_rays? -> gather_radiance
 //!                  -> spawn_reflection_rays?, spawn_pass_through_rays? -> advance_depth
@@ -23,7 +23,6 @@ use bevy_ecs::prelude::*;
 use bevy_ecs::schedule::ScheduleLabel;
 
 use crate::error::Result;
-use crate::film::estimate::accumulate_moments;
 use crate::film::{Film, accumulate_film};
 pub use crate::stats::{RenderStats, Stage, StageErrors};
 use crate::trace::geometry::{SceneGeometry, build_sphere_bvh, build_triangle_bvh};
@@ -124,10 +123,7 @@ pub fn pass_schedule() -> Schedule {
     s.add_systems((
         generate_camera_samples.in_set(GenerateSamples),
         trace_wavefronts.in_set(Trace),
-        // Because the moments read each pixel's mean before the sample is added.
-        (accumulate_moments, accumulate_film)
-            .chain()
-            .in_set(Accumulate),
+        accumulate_film.in_set(Accumulate),
     ));
     s
 }

@@ -92,11 +92,16 @@ fn film_counts_and_drops_nonfinite_samples() {
     use glam::Vec3;
     use glint::film::{Film, accumulate_film};
     use glint::stats::RenderStats;
-    use glint::trace::wavefront::SampleRadiance;
+    use glint::trace::wavefront::{PassRegion, SampleRadiance};
 
     let mut world = World::new();
     world.insert_resource(Film::new(4, 1));
     world.insert_resource(RenderStats::default());
+    world.insert_resource(PassRegion {
+        sample: 0,
+        first_pixel: 0,
+        pixels: 4,
+    });
     world.insert_resource(SampleRadiance {
         first_pixel: 0,
         values: vec![

@@ -9,14 +9,11 @@
 //! estimates the variance of the pixel (randomised quasi-Monte Carlo). The image's MSE
 //! is the mean of the pixels' variances over pixels and channels (docs/sampling.md).
 
-use bevy_ecs::prelude::*;
 use glam::{DVec3, Vec3};
-use rayon::prelude::*;
 
 use super::Film;
 use super::metrics::REL_MSE_EPSILON;
 use crate::scene::{PixelSampling, SamplerKind, Settings};
-use crate::trace::wavefront::{PassRegion, SampleRadiance};
 
 /// How the film estimates its error.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -77,40 +74,16 @@ pub struct ErrorEstimate {
     pub method: EstimateMethod,
 }
 
-/// Adds each finite sample of the region to the film's moments and its odd replica.
-/// Runs before [`super::accumulate_film`], because Welford's update reads the pixel's
-/// mean before the sample: a pixel of constant samples then keeps `m2` exactly 0.
-pub fn accumulate_moments(
-    radiance: Res<SampleRadiance>,
-    region: Res<PassRegion>,
-    mut film: ResMut<Film>,
-) {
-    let start = radiance.first_pixel as usize;
-    let end = start + radiance.values.len();
-    let odd = region.sample & 1 == 1;
-    let film = &mut *film;
-    film.sum[start..end]
-        .par_iter()
-        .zip(&film.count[start..end])
-        .zip(&mut film.m2[start..end])
-        .zip(&mut film.replica_sum[start..end])
-        .zip(&mut film.replica_count[start..end])
-        .zip(&radiance.values)
-        .for_each(|(((((sum, &count), m2), rsum), rcount), c)| {
-            if !c.is_finite() {
-                return;
-            }
-            let x = c.as_dvec3();
-            if count > 0 {
-                let before = *sum / f64::from(count);
-                let after = (*sum + x) / f64::from(count + 1);
-                *m2 += (x - before) * (x - after);
-            }
-            if odd {
-                *rsum += x;
-                *rcount += 1;
-            }
-        });
+/// Welford's update of a pixel's `m2` for the finite sample `x`, given the pixel's
+/// `sum` and `count` before it (the film adds the sample after, in
+/// [`super::accumulate_film`]).
+#[inline]
+pub fn add_moment(m2: &mut DVec3, sum: DVec3, count: u32, x: DVec3) {
+    if count > 0 {
+        let before = sum / f64::from(count);
+        let after = (sum + x) / f64::from(count + 1);
+        *m2 += (x - before) * (x - after);
+    }
 }
 
 impl Film {
@@ -172,6 +145,8 @@ impl Film {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::trace::wavefront::{PassRegion, SampleRadiance};
+    use bevy_ecs::prelude::*;
     use bevy_ecs::system::RunSystemOnce;
 
     /// A one-pixel film fed `samples` in pass order, through the moments and the sum.
@@ -190,9 +165,6 @@ mod tests {
                 pixels: 1,
             });
             world.init_resource::<crate::stats::RenderStats>();
-            world
-                .run_system_once(accumulate_moments)
-                .expect("moments run");
             world
                 .run_system_once(super::super::accumulate_film)
                 .expect("film runs");

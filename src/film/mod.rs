@@ -14,7 +14,7 @@ use rayon::prelude::*;
 
 use crate::error::{GlintError, Result};
 use crate::stats::{RenderStats, Stage};
-use crate::trace::wavefront::SampleRadiance;
+use crate::trace::wavefront::{PassRegion, SampleRadiance};
 
 /// Accumulated radiance: a sum and a sample count per pixel, row 0 at the top, and the
 /// moments its error estimate needs (see [`estimate`]).
@@ -108,28 +108,45 @@ impl Film {
     }
 }
 
-/// Adds the region's finite samples to the film; counts and drops the others.
+/// Adds the region's finite samples to the film and to its moments (see [`estimate`]);
+/// counts and drops the others. One pass over the region's pixels: each pixel's sum and
+/// count are read once (two passes, moments then sum, cost 7% of the Cornell render).
 pub fn accumulate_film(
     radiance: Res<SampleRadiance>,
+    region: Res<PassRegion>,
     mut film: ResMut<Film>,
     mut stats: ResMut<RenderStats>,
 ) {
     let start = radiance.first_pixel as usize;
     let end = start + radiance.values.len();
+    let odd = region.sample & 1 == 1;
     let film = &mut *film;
-    let dropped: u64 = film.sum[start..end]
-        .par_iter_mut()
-        .zip(&mut film.err[start..end])
-        .zip(&mut film.count[start..end])
-        .zip(&radiance.values)
-        .map(|(((sum, err), count), c)| {
-            if c.is_finite() {
-                add_exact(sum, err, c.as_dvec3());
-                *count += 1;
-                0
-            } else {
-                1
+    let pixels = (
+        &mut film.sum[start..end],
+        &mut film.err[start..end],
+        &mut film.count[start..end],
+        &mut film.m2[start..end],
+        &mut film.replica_sum[start..end],
+        &mut film.replica_count[start..end],
+        &radiance.values,
+    );
+    let dropped: u64 = pixels
+        .into_par_iter()
+        .map(|(sum, err, count, m2, rsum, rcount, c)| {
+            if !c.is_finite() {
+                return 1;
             }
+            let x = c.as_dvec3();
+            // Because Welford's update reads the mean before the sample: a pixel of
+            // constant samples then keeps `m2` exactly 0.
+            estimate::add_moment(m2, *sum, *count, x);
+            if odd {
+                *rsum += x;
+                *rcount += 1;
+            }
+            add_exact(sum, err, x);
+            *count += 1;
+            0
         })
         .sum();
     stats.nonfinite_samples += dropped;

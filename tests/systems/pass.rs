@@ -2,7 +2,7 @@
 
 use bevy_ecs::prelude::*;
 use glam::{DVec3, Vec3};
-use glint::film::estimate::{EstimateMethod, accumulate_moments};
+use glint::film::estimate::EstimateMethod;
 use glint::film::{Film, accumulate_film};
 use glint::scene::{Camera, Material, MaterialRef, Settings, Sphere};
 use glint::schedule::{RenderStats, Stage, add_render_schedules, run_prepare, trace_wavefronts};
@@ -139,7 +139,12 @@ fn accumulate_film_adds_the_radiance_buffer_to_its_pixels() {
         first_pixel: 1,
         values: vec![Vec3::new(1.0, 2.0, 3.0), Vec3::new(0.5, 0.5, 0.5)],
     };
-    let mut world = world![film, radiance, RenderStats::default()];
+    let region = PassRegion {
+        sample: 1,
+        first_pixel: 1,
+        pixels: 2,
+    };
+    let mut world = world![film, radiance, region, RenderStats::default()];
     run(&mut world, accumulate_film);
     let film = world.resource::<Film>();
     assert_eq!(film.count, [0, 2, 1]);
@@ -158,7 +163,12 @@ fn accumulate_film_counts_and_drops_non_finite_samples() {
         first_pixel: 0,
         values: vec![Vec3::new(f32::NAN, 0.0, 0.0), Vec3::ONE],
     };
-    let mut world = world![Film::new(2, 1), radiance, RenderStats::default()];
+    let region = PassRegion {
+        sample: 0,
+        first_pixel: 0,
+        pixels: 2,
+    };
+    let mut world = world![Film::new(2, 1), radiance, region, RenderStats::default()];
     run(&mut world, accumulate_film);
     let film = world.resource::<Film>();
     assert_eq!(film.count, [0, 1]);
@@ -167,7 +177,7 @@ fn accumulate_film_counts_and_drops_non_finite_samples() {
 }
 
 #[test]
-fn accumulate_moments_adds_deviations_and_the_odd_replica() {
+fn accumulate_film_adds_deviations_and_the_odd_replica() {
     // Pixel 0 already holds one sample of 1.0 (pass 0); pass 1 adds 3.0.
     let mut film = Film::new(2, 1);
     film.sum[0] = DVec3::ONE;
@@ -182,7 +192,6 @@ fn accumulate_moments_adds_deviations_and_the_odd_replica() {
         pixels: 2,
     };
     let mut world = world![film, radiance, region, RenderStats::default()];
-    run(&mut world, accumulate_moments);
     run(&mut world, accumulate_film);
     let film = world.resource::<Film>();
     // Welford: (3 - 1) * (3 - 2) = 2, the sum of squared deviations of {1, 3}.
