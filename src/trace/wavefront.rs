@@ -514,8 +514,11 @@ pub fn trace_shadow_rays(
 
 /// Adds each ray's radiance into its camera sample, in queue order (deterministic).
 pub fn gather_radiance(wf: Res<Wavefront>, mut radiance: ResMut<SampleRadiance>) {
+    // The slice taken once: indexing through the `ResMut` reloaded the vector's pointer
+    // and length on every ray (the stores might have aliased them).
+    let values = &mut radiance.values[..];
     for (q, c) in wf.rays.iter().zip(&wf.ray_radiance) {
-        radiance.values[q.slot as usize] += *c;
+        values[q.slot as usize] += *c;
     }
 }
 
