@@ -305,8 +305,10 @@ pub(super) fn shade_chunks_in_lanes(
             let mut scratch = Scratch::default();
             // The chunk's pixels, written before its first group: each group's hash
             // loop reads its eight as one vector, which waited on eight fresh stores
-            // when the group wrote them itself.
-            let mut pixels = vec![0; rays.len().next_multiple_of(LANES)];
+            // when the group wrote them itself. On the stack: a chunk holds at most
+            // `CHUNK` rays, and nothing is allocated per chunk.
+            let mut pixels = [0; CHUNK];
+            let pixels = &mut pixels[..rays.len().next_multiple_of(LANES)];
             for (p, q) in pixels.iter_mut().zip(rays) {
                 *p = cx.region.first_pixel.wrapping_add(q.slot);
             }
