@@ -126,12 +126,7 @@ fn reference_leaves(bvh: &Bvh, tris: &[Tri]) -> (Vec<WideNode>, LeafTris) {
 
 #[test]
 fn the_collapse_groups_leaves_in_slot_order() {
-    for (tris, split) in [
-        (random_tris(1, 15), SplitMethod::SahBinned),
-        (random_tris(3000, 16), SplitMethod::SahBinned),
-        (random_tris(3000, 17), SplitMethod::Median),
-        (grid(24), SplitMethod::SahBinned),
-    ] {
+    for (tris, split) in sample_trees(1, 3000, 15, 24) {
         let (bvh, wide) = both(&tris, split);
         let (nodes, leaves) = reference_leaves(&bvh, &tris);
         assert_eq!(wide.nodes, nodes);

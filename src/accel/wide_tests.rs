@@ -39,6 +39,17 @@ fn both(tris: &[Tri], split: SplitMethod) -> (Bvh, WideBvh) {
     (bvh, wide)
 }
 
+/// The trees the collapse tests walk, with their split: a few random triangles, many
+/// (binned SAH and median) from seeds `seed` and `seed + 1`, and a grid of `grid_n`².
+fn sample_trees(few: usize, many: usize, seed: u64, grid_n: usize) -> [(Vec<Tri>, SplitMethod); 4] {
+    [
+        (random_tris(few, seed), SplitMethod::SahBinned),
+        (random_tris(many, seed + 1), SplitMethod::SahBinned),
+        (random_tris(many, seed + 2), SplitMethod::Median),
+        (grid(grid_n), SplitMethod::SahBinned),
+    ]
+}
+
 fn rays(n: usize, seed: u64) -> Vec<(Ray, f32)> {
     let mut rng = Lcg(seed);
     (0..n)
@@ -75,12 +86,7 @@ fn empty_wide_bvh_never_hits_and_validates() {
 
 #[test]
 fn collapsed_trees_validate_and_are_wide() {
-    for (tris, split) in [
-        (random_tris(3, 1), SplitMethod::SahBinned),
-        (random_tris(2000, 2), SplitMethod::SahBinned),
-        (random_tris(2000, 3), SplitMethod::Median),
-        (grid(20), SplitMethod::SahBinned),
-    ] {
+    for (tris, split) in sample_trees(3, 2000, 1, 20) {
         let (bvh, wide) = both(&tris, split);
         wide.validate(&tris).unwrap();
         if tris.len() > 100 {
