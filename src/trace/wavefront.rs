@@ -483,6 +483,7 @@ pub fn trace_shadow_rays(
     materials: Res<Materials>,
     mut wf: ResMut<Wavefront>,
     mut stats: ResMut<RenderStats>,
+    log: Option<Res<TraceLog>>,
 ) {
     let t_max = 1.0 - SHADOW_EPSILON;
     let wf = &mut *wf;
@@ -495,8 +496,10 @@ pub fn trace_shadow_rays(
     } else {
         // The queue's packets as they are (the lanes shading's: sample k of eight
         // neighbouring hits, to the same light), read in lanes by the packet query.
+        // What arrived is kept for the debug recorder only (a run with a trace log).
+        let keep_arrived = log.is_some();
         wf.shadow_rays
-            .trace_packets(&mut wf.ray_radiance, |packet, arrived| {
+            .trace_packets(&mut wf.ray_radiance, keep_arrived, |packet, arrived| {
                 let blocked = geometry.occluded_lanes(&packet.rays, t_max);
                 for r in packet.rays.lanes() {
                     arrived[r] = if blocked & (1 << r) != 0 {
