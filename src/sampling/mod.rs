@@ -15,5 +15,6 @@ pub use pixel::{
     offset_of_jitter, pixel_mode, pixel_sample_offset, samples_per_pixel, samples_taken,
 };
 pub use sampler::{
-    DIM_PIXEL, LightSlot, PointSampler, SLOT_LANES, Sampler, SlotLanes, SlotSampler, light_dim,
+    DIM_PIXEL, LightSlot, PackedSlots, PointSampler, SLOT_LANES, Sampler, SlotLanes, SlotSampler,
+    light_dim,
 };

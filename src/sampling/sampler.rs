@@ -31,6 +31,7 @@ pub struct Sampler {
 pub type LightSlot = (u32, u32, u32);
 
 /// The splitmix64 finaliser: a bijective 64-bit mixer with full avalanche.
+#[inline(always)]
 fn mix64(mut x: u64) -> u64 {
     x = x.wrapping_add(0x9E37_79B9_7F4A_7C15);
     x = (x ^ (x >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
@@ -177,6 +178,7 @@ impl Sampler {
 }
 
 /// A number in [0, 1) from a 64-bit hash.
+#[inline(always)]
 fn unit_from_hash(h: u64) -> f32 {
     // 24 bits fill an f32 mantissa exactly: the result is a multiple of
     // 2^-24 and at most 1 - 2^-24 (the largest f32 below 1), never 1.0, with no rounding and no
@@ -356,29 +358,21 @@ impl SlotLanes {
         slot: impl Fn(usize) -> LightSlot,
         n: u32,
     ) -> Self {
-        let mut prefix = [0; SLOT_LANES];
-        let mut first = [0; SLOT_LANES];
-        let mut packed = true;
-        for (j, p) in points.iter().enumerate() {
-            if lanes & (1 << j) == 0 {
-                continue;
-            }
-            let (depth, path, light) = slot(j);
-            match (p.kind, packed_light_dim(depth, path, light)) {
-                (SamplerKind::Independent, Some(d)) => (prefix[j], first[j]) = (p.prefix, d),
-                _ => packed = false,
-            }
-        }
-        let slots = if packed && n <= 1 << LIGHT_SAMPLE_BITS {
-            [None; SLOT_LANES]
-        } else {
-            std::array::from_fn(|j| (lanes & (1 << j) != 0).then(|| points[j].slot(slot(j), n)))
-        };
-        Self {
-            slots,
-            prefix,
-            first,
-            packed,
+        match PackedSlots::new(points, lanes, &slot, n) {
+            Some(PackedSlots { prefix, first }) => Self {
+                slots: [None; SLOT_LANES],
+                prefix,
+                first,
+                packed: true,
+            },
+            None => Self {
+                slots: std::array::from_fn(|j| {
+                    (lanes & (1 << j) != 0).then(|| points[j].slot(slot(j), n))
+                }),
+                prefix: [0; SLOT_LANES],
+                first: [0; SLOT_LANES],
+                packed: false,
+            },
         }
     }
 
@@ -407,6 +401,52 @@ impl SlotLanes {
     }
 }
 
+/// [`SlotLanes`] whose samples `k < n` are all packed (the independent kind within the
+/// packed fields): each lane's prefix and first dimension, all their numbers need. Made
+/// without the lanes' `SlotSampler`s, and its numbers inline into a caller's own AVX2
+/// clone.
+#[derive(Clone, Copy, Debug)]
+pub struct PackedSlots {
+    /// Each lane's `PointSampler` prefix (0 without a slot).
+    prefix: [u64; SLOT_LANES],
+    /// Each lane's dimension of sample 0 (0 without a slot).
+    first: [u32; SLOT_LANES],
+}
+
+impl PackedSlots {
+    /// The slots [`SlotLanes::new`] makes of the same arguments, if they are all packed.
+    pub fn new(
+        points: &[PointSampler; SLOT_LANES],
+        lanes: u32,
+        slot: impl Fn(usize) -> LightSlot,
+        n: u32,
+    ) -> Option<Self> {
+        if n > 1 << LIGHT_SAMPLE_BITS {
+            return None;
+        }
+        let mut prefix = [0; SLOT_LANES];
+        let mut first = [0; SLOT_LANES];
+        for (j, p) in points.iter().enumerate() {
+            if lanes & (1 << j) == 0 {
+                continue;
+            }
+            let (depth, path, light) = slot(j);
+            match (p.kind, packed_light_dim(depth, path, light)) {
+                (SamplerKind::Independent, Some(d)) => (prefix[j], first[j]) = (p.prefix, d),
+                _ => return None,
+            }
+        }
+        Some(Self { prefix, first })
+    }
+
+    /// [`SlotLanes::light2`] of sample `k` (below the `n` they were made for).
+    #[inline(always)]
+    pub fn light2(&self, k: u32, u: &mut [f32; SLOT_LANES], v: &mut [f32; SLOT_LANES]) {
+        unit_lanes(&self.prefix, &self.first, 2 * k, u);
+        unit_lanes(&self.prefix, &self.first, 2 * k + 1, v);
+    }
+}
+
 /// `Sampler::prefix(pixels[j], sample)` in each lane.
 #[multiversion(targets("x86_64+avx2+fma", "x86_64+sse4.2"))]
 fn prefixes(seed_hash: u64, pixels: &[u32; SLOT_LANES], sample: u32, out: &mut [u64; SLOT_LANES]) {
@@ -419,6 +459,17 @@ fn prefixes(seed_hash: u64, pixels: &[u32; SLOT_LANES], sample: u32, out: &mut [
 /// first dimension are 0 get some number, unused.
 #[multiversion(targets("x86_64+avx2+fma", "x86_64+sse4.2"))]
 fn units(
+    prefix: &[u64; SLOT_LANES],
+    first: &[u32; SLOT_LANES],
+    add: u32,
+    out: &mut [f32; SLOT_LANES],
+) {
+    unit_lanes(prefix, first, add, out);
+}
+
+/// The loop of [`units`], inlined into its callers' clones.
+#[inline(always)]
+fn unit_lanes(
     prefix: &[u64; SLOT_LANES],
     first: &[u32; SLOT_LANES],
     add: u32,
@@ -655,6 +706,18 @@ mod tests {
                     for j in (0..SLOT_LANES).filter(|&j| j != 3) {
                         let got = (u1[j].to_bits(), Vec2::new(u2[j], v2[j]));
                         assert_eq!(got, (u.to_bits(), uv), "{kind:?} {slot:?} {k} of {n}");
+                    }
+                    // Packed where the independent kind packs every sample below n.
+                    let packed = PackedSlots::new(&points, !(1 << 3), |_| slot, n);
+                    let packs = kind == SamplerKind::Independent
+                        && packed_light_dim(depth, path, light).is_some()
+                        && n <= 1 << LIGHT_SAMPLE_BITS;
+                    assert_eq!(packed.is_some(), packs, "{kind:?} {slot:?} {n}");
+                    if let Some(packed) = packed {
+                        packed.light2(k, &mut u2, &mut v2);
+                        for j in (0..SLOT_LANES).filter(|&j| j != 3) {
+                            assert_eq!(Vec2::new(u2[j], v2[j]), uv, "{slot:?} {k} of {n}");
+                        }
                     }
                 }
             }

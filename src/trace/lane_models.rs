@@ -79,6 +79,19 @@ pub(super) fn shade_sample(
     out: &mut SampleLanes,
 ) {
     out.position = *position;
+    lambertian_lanes(surface, hits, color, out);
+}
+
+/// [`shade_sample`] with the sample's position already in `out.position`: its loop,
+/// inlined into its callers' clones.
+#[inline(always)]
+pub(super) fn lambertian_lanes(
+    surface: &SurfaceLanes,
+    hits: &HitLanes,
+    color: &Lanes3,
+    out: &mut SampleLanes,
+) {
+    let position = &out.position;
     for j in 0..LANES {
         let lx = position[0][j] - surface.p[0][j];
         let ly = position[1][j] - surface.p[1][j];
@@ -91,13 +104,16 @@ pub(super) fn shade_sample(
         let cos = (surface.n[0][j] * lx) + (surface.n[1][j] * ly) + (surface.n[2][j] * lz);
         // `lit` is `cos > 0`; there `cos.max(0.0)` is `cos` itself.
         let lit = cos > 0.0;
+        let mut c = [0.0; 3];
         for a in 0..3 {
             let d = color[a][j] * hits.kd[a][j] * cos;
-            let d = if lit && d.is_finite() { d } else { 0.0 };
-            out.c[a][j] = d * hits.w[a][j];
+            // `&`, not `&&`: one select (the branch became two masked stores, which a
+            // later whole-vector load of `c` cannot forward from).
+            let d = if lit & d.is_finite() { d } else { 0.0 };
+            c[a] = d * hits.w[a][j];
+            out.c[a][j] = c[a];
         }
-        out.keep[j] =
-            u32::from(ok && (out.c[0][j] != 0.0 || out.c[1][j] != 0.0 || out.c[2][j] != 0.0));
+        out.keep[j] = u32::from(ok & (c[0] != 0.0 || c[1] != 0.0 || c[2] != 0.0));
     }
 }
 

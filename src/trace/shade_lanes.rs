@@ -19,13 +19,15 @@ use multiversion::multiversion;
 
 pub(super) use super::lane_models::LaneModel;
 use super::lane_models::{
-    HitLanes, LANES, Lanes, Lanes3, SampleLanes, blinn_phong_sample, phong_sample, shade_sample,
+    HitLanes, LANES, Lanes, Lanes3, SampleLanes, blinn_phong_sample, lambertian_lanes,
+    phong_sample, shade_sample,
 };
 use super::shadow::{CHUNK, ShadowPacket, ShadowPackets, ShadowQueue};
 use super::surface::MIN_OFFSET_COORDINATE;
+use super::surface_lanes::SurfaceLanes;
 use super::surface_queue::{SurfaceBlock, SurfaceQueue};
 use super::wavefront::{QueuedRay, ShadeContext, blend_alpha, for_each_shading_chunk};
-use crate::sampling::SlotLanes;
+use crate::sampling::{PackedSlots, SlotLanes};
 
 // A group's lanes are one shadow packet's.
 const _: () = assert!(LANES == crate::accel::PACKET);
@@ -101,6 +103,19 @@ fn parallelogram_lanes(
     position: &mut Lanes3,
     color: &mut Lanes3,
 ) {
+    parallelogram_points(q, u, v, inv, position, color);
+}
+
+/// The loop of [`parallelogram_lanes`], inlined into its callers' clones.
+#[inline(always)]
+fn parallelogram_points(
+    q: &crate::scene::ParallelogramLight,
+    u: &Lanes,
+    v: &Lanes,
+    inv: f32,
+    position: &mut Lanes3,
+    color: &mut Lanes3,
+) {
     let (v0, e1, e2) = (q.v0.to_array(), q.edge01.to_array(), q.edge02.to_array());
     let cs = [
         q.color0.to_array(),
@@ -115,6 +130,29 @@ fn parallelogram_lanes(
             position[k][j] = v0[k] + u * e1[k] + v * e2[k];
             color[k][j] = (a * cs[0][k] + b * cs[1][k] + c * cs[2][k] + d * cs[3][k]) * inv;
         }
+    }
+}
+
+/// The Lambertian samples of parallelogram light `q` at the group's hits, sample `k`
+/// into `samples[k]`, with packed sampler slots: `shade_group`'s loop of `light2`,
+/// [`parallelogram_lanes`] and [`shade_sample`] in one AVX2 clone, so that no lane
+/// array crosses a call and the samples' chains (a square root and a division each)
+/// overlap.
+#[multiversion(targets("x86_64+avx2+fma", "x86_64+sse4.2"))]
+fn lambertian_parallelogram_samples(
+    q: &crate::scene::ParallelogramLight,
+    slots: &PackedSlots,
+    inv: f32,
+    surface: &SurfaceLanes,
+    hits: &HitLanes,
+    samples: &mut [SampleLanes],
+) {
+    for (k, sample) in samples.iter_mut().enumerate() {
+        let (mut u, mut v) = (Lanes::default(), Lanes::default());
+        slots.light2(k as u32, &mut u, &mut v);
+        let mut color = Lanes3::default();
+        parallelogram_points(q, &u, &v, inv, &mut sample.position, &mut color);
+        lambertian_lanes(surface, hits, &color, sample);
     }
 }
 
@@ -190,17 +228,20 @@ fn shade_group(
     // The group's samples, light by light, into `samples` (its entries are overwritten:
     // it keeps its length from group to group, so nothing is zeroed or copied twice).
     let mut count = 0;
-    let mut shade = |position: &Lanes3, color: &Lanes3| {
-        if samples.len() == count {
+    let shade = |samples: &mut Vec<SampleLanes>,
+                 count: &mut usize,
+                 position: &Lanes3,
+                 color: &Lanes3| {
+        if samples.len() == *count {
             samples.push(SampleLanes::default());
         }
-        let sample = &mut samples[count];
+        let sample = &mut samples[*count];
         match model {
             LaneModel::Lambertian => shade_sample(surface, lanes, position, color, sample),
             LaneModel::Phong => phong_sample(surface, lanes, position, color, sample),
             LaneModel::BlinnPhong => blinn_phong_sample(surface, lanes, position, color, sample),
         }
-        count += 1;
+        *count += 1;
     };
     let mut position = Lanes3::default();
     let mut color = Lanes3::default();
@@ -209,7 +250,7 @@ fn shade_group(
         let (pp, pc) = (p.position.to_array(), p.color.to_array());
         let position = pp.map(|x| [x; LANES]);
         let color = pc.map(|x| [x; LANES]);
-        shade(&position, &color);
+        shade(samples, &mut count, &position, &color);
     }
     let base = lights.points.len();
     for (i, l) in lights.segments.iter().enumerate() {
@@ -217,16 +258,29 @@ fn shade_group(
         for k in 0..n {
             slots.light1(k, &mut u);
             segment_lanes(l, &u, inv, &mut position, &mut color);
-            shade(&position, &color);
+            shade(samples, &mut count, &position, &color);
         }
     }
     let base = base + lights.segments.len();
     for (i, q) in lights.parallelograms.iter().enumerate() {
+        let light = (base + i) as u32;
+        let packed = || PackedSlots::new(&at, hits.hit, |j| (cx.depth, path(j), light), n);
+        if let (LaneModel::Lambertian, Some(packed)) = (model, packed()) {
+            // The render's case: all samples in one call.
+            let end = count + n as usize;
+            if samples.len() < end {
+                samples.resize(end, SampleLanes::default());
+            }
+            let group = &mut samples[count..end];
+            lambertian_parallelogram_samples(q, &packed, inv, surface, lanes, group);
+            count = end;
+            continue;
+        }
         let slots = slots(base + i);
         for k in 0..n {
             slots.light2(k, &mut u, &mut v);
             parallelogram_lanes(q, &u, &v, inv, &mut position, &mut color);
-            shade(&position, &color);
+            shade(samples, &mut count, &position, &color);
         }
     }
     let samples = &samples[..count];
