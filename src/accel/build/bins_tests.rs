@@ -3,7 +3,7 @@
 use glam::Vec3;
 use wide::f32x4;
 
-use super::super::NodeBounds;
+use super::super::{NodeBounds, blocks};
 use super::*;
 use crate::accel::Aabb;
 use crate::test_util::Lcg;
