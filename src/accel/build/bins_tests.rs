@@ -295,6 +295,12 @@ fn partition_matches_the_reference_order_and_boxes() {
                     let axis = rng.below(3) as usize;
                     (lo[axis], hi[axis]) = (f32::NAN, f32::NAN);
                 }
+                if rng.below(4) == 0 {
+                    // Centroid coordinates of +0 and -0: ties the boxes' order decides.
+                    let axis = rng.below(3) as usize;
+                    let zero = if rng.below(2) == 0 { 0.0 } else { -0.0 };
+                    (lo[axis], hi[axis]) = (zero, zero);
+                }
                 PrimRef::new(i, &Aabb::new(lo, hi))
             })
             .collect();
