@@ -3,7 +3,7 @@
 use glam::Vec3;
 use wide::f32x4;
 
-use super::super::NodeBounds;
+use super::super::{NodeBounds, blocks};
 use super::*;
 use crate::accel::Aabb;
 use crate::test_util::Lcg;
@@ -294,6 +294,12 @@ fn partition_matches_the_reference_order_and_boxes() {
                     // A NaN centroid coordinate, which goes left.
                     let axis = rng.below(3) as usize;
                     (lo[axis], hi[axis]) = (f32::NAN, f32::NAN);
+                }
+                if rng.below(4) == 0 {
+                    // Centroid coordinates of +0 and -0: ties the boxes' order decides.
+                    let axis = rng.below(3) as usize;
+                    let zero = if rng.below(2) == 0 { 0.0 } else { -0.0 };
+                    (lo[axis], hi[axis]) = (zero, zero);
                 }
                 PrimRef::new(i, &Aabb::new(lo, hi))
             })
