@@ -36,7 +36,7 @@ const MAX_LEAF: u32 = 2 * LANES as u32;
 type Lanes = ArrayVec<(usize, bool), WIDTH>;
 
 /// Per binary node: its subtree's first slot in `prim_indices` and triangle count,
-/// whether all its leaves are flat, and `cost[i - 1]`, the least cost of its subtree in
+/// whether all its leaves are flat (for subtrees of at most [`MAX_LEAF`] triangles), and `cost[i - 1]`, the least cost of its subtree in
 /// at most `i` lanes.
 struct Costs {
     first: Vec<u32>,
@@ -51,13 +51,13 @@ fn is_flat(b: &Aabb) -> bool {
     e.x == 0.0 || e.y == 0.0 || e.z == 0.0
 }
 
-/// Whether an interior node of box `b`, whose leaves are all flat when `flat_leaves`,
-/// encloses space as a room's walls do: flat leaves around a box with volume, as the
-/// build's room split (`build/rooms.rs`) makes them. Merged into one leaf, its box
-/// would be the room's, which every ray starting in the room meets; apart, each wall's
-/// flat box is met only by rays crossing it. Closed meshes have no flat leaves.
-fn encloses(b: &Aabb, flat_leaves: bool) -> bool {
-    flat_leaves && !is_flat(b) && !b.is_empty()
+/// Whether an interior node of box `b` whose leaves are all flat encloses space as a
+/// room's walls do: its own box has volume, as the build's room split
+/// (`build/rooms.rs`) makes them. Merged into one leaf, its box would be the room's,
+/// which every ray starting in the room meets; apart, each wall's flat box is met only
+/// by rays crossing it. Closed meshes have no flat leaves, so this is never asked.
+fn encloses(b: &Aabb) -> bool {
+    !is_flat(b) && !b.is_empty()
 }
 
 /// Cost of a leaf of `count` triangles whose box has area `area` (the odds of a ray
@@ -113,18 +113,22 @@ impl Costs {
         for b in (0..n).rev() {
             let node = &bvh.nodes[b];
             if node.is_leaf() {
+                let bounds = node.bounds();
                 (c.first[b], c.count[b]) = (node.offset, node.count);
-                c.flat[b] = is_flat(&node.bounds());
-                c.cost[b] = [leaf_cost(node.bounds().surface_area(), node.count); WIDTH];
+                c.flat[b] = is_flat(&bounds);
+                c.cost[b] = [leaf_cost(bounds.surface_area(), node.count); WIDTH];
                 continue;
             }
             let (left, right) = (b + 1, node.offset as usize);
             (c.first[b], c.count[b]) = (c.first[left], c.count[left] + c.count[right]);
-            c.flat[b] = c.flat[left] && c.flat[right];
+            // Only what a leaf could hold needs it (`single`); above, it stays false.
+            if c.count[b] <= MAX_LEAF {
+                c.flat[b] = c.flat[left] && c.flat[right];
+            }
             let splits = splits(&c.cost[left], &c.cost[right]);
-            let area = node.bounds().surface_area();
-            let room = encloses(&node.bounds(), c.flat[b]);
-            let mut best = single(area, c.count[b], splits[WIDTH - 1], room).0;
+            let bounds = node.bounds();
+            let room = c.flat[b] && encloses(&bounds);
+            let mut best = single(bounds.surface_area(), c.count[b], splits[WIDTH - 1], room).0;
             c.cost[b][0] = best;
             for i in 2..=WIDTH {
                 best = best.min(splits[i - 1]);
@@ -137,7 +141,7 @@ impl Costs {
     /// [`single`] of interior node `b`.
     fn single(&self, bvh: &Bvh, b: usize) -> (f32, bool) {
         let bounds = bvh.nodes[b].bounds();
-        let room = encloses(&bounds, self.flat[b]);
+        let room = self.flat[b] && encloses(&bounds);
         single(
             bounds.surface_area(),
             self.count[b],
