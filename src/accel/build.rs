@@ -25,6 +25,7 @@ use super::bvh::{Bvh, BvhNode, SplitMethod};
 use super::leaf::LANES;
 
 mod bins;
+mod rooms;
 
 use bins::{Bins, best_sah_plane, partition};
 
@@ -376,7 +377,7 @@ fn split(
 ) -> Option<(usize, NodeBounds, NodeBounds)> {
     let n = refs.len();
     if n <= MIN_LEAF {
-        return None;
+        return leaf_or_room(refs, &b, depth);
     }
     let ext = b.centroids.aabb().extent();
     // All centroids coincide (or are NaN): no plane separates them.
@@ -417,8 +418,22 @@ fn split(
             ))
         }
         _ if n > MAX_LEAF => Some(median_split(refs, ext)),
-        _ => None,
+        _ => leaf_or_room(refs, &b, depth),
     }
+}
+
+/// For a node the SAH makes a leaf: None (the leaf), or the split of a room (see
+/// `rooms`). Not below the SAH's depth, where splits must halve the count.
+#[inline(always)]
+fn leaf_or_room(
+    refs: &mut [PrimRef],
+    b: &NodeBounds,
+    depth: u32,
+) -> Option<(usize, NodeBounds, NodeBounds)> {
+    if depth >= SAH_DEPTH_LIMIT {
+        return None;
+    }
+    rooms::split_room(refs, b)
 }
 
 /// Object median along the widest centroid axis; both halves' bounds.

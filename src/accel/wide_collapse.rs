@@ -13,6 +13,7 @@
 
 use arrayvec::ArrayVec;
 
+use super::Aabb;
 use super::bvh::Bvh;
 use super::leaf::{LANES, groups_for};
 use super::wide_node::{WIDTH, WideNode};
@@ -34,12 +35,29 @@ const MAX_LEAF: u32 = 2 * LANES as u32;
 /// A wide node's lanes: `(binary node, leaf)`.
 type Lanes = ArrayVec<(usize, bool), WIDTH>;
 
-/// Per binary node: its subtree's first slot in `prim_indices` and triangle count, and
-/// `cost[i - 1]`, the least cost of its subtree in at most `i` lanes.
+/// Per binary node: its subtree's first slot in `prim_indices` and triangle count,
+/// whether all its leaves are flat (for subtrees of at most [`MAX_LEAF`] triangles), and `cost[i - 1]`, the least cost of its subtree in
+/// at most `i` lanes.
 struct Costs {
     first: Vec<u32>,
     count: Vec<u32>,
+    flat: Vec<bool>,
     cost: Vec<[f32; WIDTH]>,
+}
+
+/// Whether `b` has zero extent along an axis (a box in an axis plane).
+fn is_flat(b: &Aabb) -> bool {
+    let e = b.extent();
+    e.x == 0.0 || e.y == 0.0 || e.z == 0.0
+}
+
+/// Whether an interior node of box `b` whose leaves are all flat encloses space as a
+/// room's walls do: its own box has volume, as the build's room split
+/// (`build/rooms.rs`) makes them. Merged into one leaf, its box would be the room's,
+/// which every ray starting in the room meets; apart, each wall's flat box is met only
+/// by rays crossing it. Closed meshes have no flat leaves, so this is never asked.
+fn encloses(b: &Aabb) -> bool {
+    !is_flat(b) && !b.is_empty()
 }
 
 /// Cost of a leaf of `count` triangles whose box has area `area` (the odds of a ray
@@ -50,10 +68,10 @@ pub(super) fn leaf_cost(area: f32, count: u32) -> f32 {
 
 /// The least cost of an interior node as one lane, and whether that is a leaf (else a
 /// wide node of its own), from its box's area, its triangles and the least cost of its
-/// children in `WIDTH` lanes.
-fn single(area: f32, count: u32, children: f32) -> (f32, bool) {
+/// children in `WIDTH` lanes; a `room` (see [`encloses`]) is never merged into a leaf.
+fn single(area: f32, count: u32, children: f32, room: bool) -> (f32, bool) {
     let node = NODE_COST * area + children;
-    if count <= MAX_LEAF {
+    if count <= MAX_LEAF && !room {
         let leaf = leaf_cost(area, count);
         if leaf <= node {
             return (leaf, true);
@@ -88,21 +106,29 @@ impl Costs {
         let mut c = Costs {
             first: vec![0; n],
             count: vec![0; n],
+            flat: vec![false; n],
             cost: vec![[0.0; WIDTH]; n],
         };
         // Children follow their parent: reverse order meets them first.
         for b in (0..n).rev() {
             let node = &bvh.nodes[b];
             if node.is_leaf() {
+                let bounds = node.bounds();
                 (c.first[b], c.count[b]) = (node.offset, node.count);
-                c.cost[b] = [leaf_cost(node.bounds().surface_area(), node.count); WIDTH];
+                c.flat[b] = is_flat(&bounds);
+                c.cost[b] = [leaf_cost(bounds.surface_area(), node.count); WIDTH];
                 continue;
             }
             let (left, right) = (b + 1, node.offset as usize);
             (c.first[b], c.count[b]) = (c.first[left], c.count[left] + c.count[right]);
+            // Only what a leaf could hold needs it (`single`); above, it stays false.
+            if c.count[b] <= MAX_LEAF {
+                c.flat[b] = c.flat[left] && c.flat[right];
+            }
             let splits = splits(&c.cost[left], &c.cost[right]);
-            let area = node.bounds().surface_area();
-            let mut best = single(area, c.count[b], splits[WIDTH - 1]).0;
+            let bounds = node.bounds();
+            let room = c.flat[b] && encloses(&bounds);
+            let mut best = single(bounds.surface_area(), c.count[b], splits[WIDTH - 1], room).0;
             c.cost[b][0] = best;
             for i in 2..=WIDTH {
                 best = best.min(splits[i - 1]);
@@ -114,8 +140,14 @@ impl Costs {
 
     /// [`single`] of interior node `b`.
     fn single(&self, bvh: &Bvh, b: usize) -> (f32, bool) {
-        let area = bvh.nodes[b].bounds().surface_area();
-        single(area, self.count[b], self.split(bvh, b, WIDTH).0)
+        let bounds = bvh.nodes[b].bounds();
+        let room = self.flat[b] && encloses(&bounds);
+        single(
+            bounds.surface_area(),
+            self.count[b],
+            self.split(bvh, b, WIDTH).0,
+            room,
+        )
     }
 
     /// The least cost of interior node `b`'s two children in at most `i` (2 or more)

@@ -210,3 +210,89 @@ fn sibling_leaves_that_fit_one_group_share_it() {
     assert_eq!(root.child_bounds(1), bound(4..8));
     assert_eq!(wide.leaves.prims, (0..8).collect::<Vec<u32>>());
 }
+
+/// The two triangles of the parallelogram `origin + [0, 1] u + [0, 1] v`.
+fn wall(origin: Vec3, u: Vec3, v: Vec3) -> [Tri; 2] {
+    [
+        [origin, origin + u, origin + u + v],
+        [origin, origin + u + v, origin + v],
+    ]
+}
+
+/// Floor, ceiling, back and right walls of the Cornell box (the 8 triangles of the
+/// leaf the SAH made of them), and a short block standing in it.
+fn room() -> Vec<Tri> {
+    let (x, y, z) = (
+        vec3(2.0, 0.0, 0.0),
+        vec3(0.0, 2.0, 0.0),
+        vec3(0.0, 0.0, 2.0),
+    );
+    let mut tris: Vec<Tri> = [
+        wall(vec3(-1.0, 0.0, 1.0), x, -z),
+        wall(vec3(-1.0, 2.0, -1.0), x, z),
+        wall(vec3(-1.0, 0.0, -1.0), x, y),
+        wall(vec3(1.0, 0.0, -1.0), z, y),
+    ]
+    .concat();
+    // A tilted slab (boxes not flat), far from the walls' planes.
+    for i in 0..6 {
+        let o = vec3(-0.5 + 0.1 * i as f32, 0.3, 0.2);
+        tris.push([o, o + vec3(0.3, 0.1, 0.05), o + vec3(0.05, 0.4, 0.2)]);
+    }
+    tris
+}
+
+#[test]
+fn the_walls_of_a_room_keep_a_flat_leaf_each() {
+    // Rays from inside the room meet a leaf whose box is the room's always, and a
+    // wall's flat box only where they cross it: the build splits the walls apart and
+    // the collapse does not merge them back (`build/rooms.rs`, `encloses`).
+    // Beside many triangles far off, the room is a subtree the collapse could merge.
+    let far = random_tris(500, 33)
+        .into_iter()
+        .map(|t| t.map(|v| v + Vec3::splat(30.0)));
+    let with_far = room()[..8].iter().copied().chain(far).collect();
+    for tris in [room(), room()[..8].to_vec(), room()[..4].to_vec(), with_far] {
+        let (bvh, wide) = both(&tris, SplitMethod::SahBinned);
+        let mut walls = 0;
+        for node in &wide.nodes {
+            for l in 0..WIDTH {
+                let (lo, hi) = (
+                    vec3(node.bounds[0][l], node.bounds[1][l], node.bounds[2][l]),
+                    vec3(node.bounds[3][l], node.bounds[4][l], node.bounds[5][l]),
+                );
+                if node.child[l] == u32::MAX
+                    || node.count[l] == 0
+                    || lo.cmpge(vec3(-0.9, 0.1, -0.9)).all()
+                {
+                    continue;
+                }
+                // A leaf lane reaching a wall: exactly that wall's two triangles.
+                walls += 1;
+                assert_eq!(node.count[l], 2, "{lo} {hi}");
+                assert!((hi - lo).min_element() == 0.0, "{lo} {hi}");
+            }
+        }
+        assert_eq!(walls, tris.len().min(8) / 2, "{} triangles", tris.len());
+        wide.validate(&tris).unwrap();
+        // Rays from anywhere, and from inside the room.
+        let mut rng = Lcg(32);
+        let inside = (0..1000).map(|_| {
+            let o = rng.vec() * 1.9 + vec3(-0.95, 0.05, -0.95);
+            (
+                Ray::new(o, rng.dir()),
+                if rng.below(2) == 0 {
+                    1.0
+                } else {
+                    f32::INFINITY
+                },
+            )
+        });
+        for (ray, t_max) in rays(2000, 31).into_iter().chain(inside) {
+            let expect = binary_closest(&bvh, &tris, &ray, t_max);
+            let got = wide.closest_hit(&ray, t_max).map(|(p, h)| (p, h.t));
+            assert_eq!(got, expect, "{ray:?}");
+            assert_eq!(wide.any_hit(&ray, t_max, |_, _| true), expect.is_some());
+        }
+    }
+}
