@@ -58,9 +58,45 @@ fn main() {
         let hits = black_box(trace_rays(&wide, rays, *name == "shadow"));
         println!("{name} {} rays {hits} hits", rays.len());
     }
+    // With GLINT_RAYS_REPEAT=k: k rounds of the three sets, each round tracing each set
+    // once, and each set's least and median time on the CPU, for A/B runs of builds of
+    // this example on a shared machine (CPU time leaves out the time other processes
+    // held the core; the least is the least disturbed by them).
+    let repeat: usize = std::env::var("GLINT_RAYS_REPEAT")
+        .ok()
+        .and_then(|v| v.parse().ok())
+        .unwrap_or(0);
+    if repeat > 0 {
+        let mut ms = vec![Vec::new(); sets.len()];
+        for _ in 0..repeat {
+            for (k, (name, rays)) in sets.iter().enumerate() {
+                let start = cpu_ns();
+                black_box(trace_rays(&wide, rays, *name == "shadow"));
+                ms[k].push((cpu_ns() - start) as f64 * 1e-6);
+            }
+        }
+        for (k, (name, _)) in sets.iter().enumerate() {
+            ms[k].sort_by(f64::total_cmp);
+            println!(
+                "time {name}: least {:.2} ms median {:.2} ms",
+                ms[k][0],
+                ms[k][ms[k].len() / 2]
+            );
+        }
+    }
     println!(
         "{} triangles, {:.1} bytes/tri",
         tris.len(),
         wide.bytes() as f64 / tris.len() as f64
     );
+}
+
+/// Nanoseconds this thread has run on a CPU (Linux: the first field of
+/// /proc/thread-self/schedstat).
+fn cpu_ns() -> u64 {
+    let stat = std::fs::read_to_string("/proc/thread-self/schedstat").expect("schedstat");
+    stat.split_whitespace()
+        .next()
+        .and_then(|n| n.parse().ok())
+        .expect("schedstat's first field")
 }
