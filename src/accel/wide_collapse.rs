@@ -36,8 +36,8 @@ const MAX_LEAF: u32 = 2 * LANES as u32;
 type Lanes = ArrayVec<(usize, bool), WIDTH>;
 
 /// Per binary node: its subtree's first slot in `prim_indices` and triangle count,
-/// whether all its leaves are flat (for subtrees of at most [`MAX_LEAF`] triangles), and `cost[i - 1]`, the least cost of its subtree in
-/// at most `i` lanes.
+/// whether all its leaves are flat (for subtrees of at most [`MAX_LEAF`] triangles),
+/// and `cost[i - 1]`, the least cost of its subtree in at most `i` lanes.
 struct Costs {
     first: Vec<u32>,
     count: Vec<u32>,
