@@ -122,17 +122,15 @@ impl LeafTris {
         }
     }
 
-    /// Appends the groups of the leaf of `count` triangles at slot `slot` of `prims`,
-    /// whose vertices are `in_slots` at the same slots (`positions[prims[k]]`, gathered
-    /// beforehand in one pass: see `WideBvh::collapse`); returns the wide node's
-    /// `(child, count)` for it ([`leaf_lane`]). Leaves pushed in slot order keep the
-    /// groups in the triangles' order: neighbouring leaves stay close.
+    /// Appends the groups of the leaf of `count` triangles at slot `slot` of `prims`;
+    /// returns the wide node's `(child, count)` for it ([`leaf_lane`]). Leaves pushed in
+    /// slot order keep the groups in the triangles' order: neighbouring leaves stay close.
     pub fn push_leaf(
         &mut self,
         slot: u32,
         count: u32,
         prims: &[u32],
-        in_slots: &[[Vec3; 3]],
+        positions: &[[Vec3; 3]],
     ) -> (u32, u32) {
         let first_group = self.groups.len();
         let (slot, end) = (slot as usize, (slot + count) as usize);
@@ -141,7 +139,7 @@ impl LeafTris {
             let mut group = TriGroup::PADDING;
             let mut lanes = [NO_PRIM; LANES];
             for k in start..(start + LANES).min(end) {
-                let tri @ [a, b, c] = in_slots[k];
+                let tri @ [a, b, c] = positions[prims[k] as usize];
                 degenerate |= is_degenerate(a, b, c);
                 group.set_triangle(k - start, tri);
                 lanes[k - start] = prims[k];

@@ -79,16 +79,8 @@ impl WideBvh {
             .sum();
         let mut leaves = LeafTris::with_capacity(groups);
         let mut nodes = Vec::with_capacity(wide_node_estimate(bvh.nodes.len()));
-        // The triangles in slot order, gathered in a loop of nothing else: its cache
-        // misses (the slots visit `positions` out of order) overlap many at a time, where
-        // among the leaves' work they took half of it.
-        let in_slots: Vec<[Vec3; 3]> = bvh
-            .prim_indices
-            .iter()
-            .map(|&p| positions[p as usize])
-            .collect();
         let depth = collapse(bvh, &mut nodes, &mut |slot, count| {
-            leaves.push_leaf(slot, count, &bvh.prim_indices, &in_slots)
+            leaves.push_leaf(slot, count, &bvh.prim_indices, positions)
         });
         nodes.shrink_to_fit();
         WideBvh {

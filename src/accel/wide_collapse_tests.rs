@@ -116,11 +116,10 @@ fn reference_leaves(bvh: &Bvh, tris: &[Tri]) -> (Vec<WideNode>, LeafTris) {
     }
     lanes.sort_unstable();
     let mut leaves = LeafTris::default();
-    let in_slots: Vec<[Vec3; 3]> = bvh.prim_indices.iter().map(|&p| tris[p as usize]).collect();
     for (slot, i, lane) in lanes {
         let count = nodes[i].count[lane];
         (nodes[i].child[lane], nodes[i].count[lane]) =
-            leaves.push_leaf(slot, count, &bvh.prim_indices, &in_slots);
+            leaves.push_leaf(slot, count, &bvh.prim_indices, tris);
     }
     (nodes, leaves)
 }
