@@ -137,8 +137,8 @@ pub fn accumulate_film(
                 return 1;
             }
             let x = c.as_dvec3();
-            // Because Welford's update reads the mean before the sample: a pixel of
-            // constant samples then keeps `m2` exactly 0.
+            // The moment before the sum: Welford's update reads the pixel's mean before
+            // the sample, so a pixel of constant samples keeps `m2` exactly 0.
             estimate::add_moment(m2, *sum, *count, x);
             if odd {
                 *rsum += x;

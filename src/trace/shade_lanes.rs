@@ -264,8 +264,11 @@ fn shade_group(
     let base = base + lights.segments.len();
     for (i, q) in lights.parallelograms.iter().enumerate() {
         let light = (base + i) as u32;
-        let packed = || PackedSlots::new(&at, hits.hit, |j| (cx.depth, path(j), light), n);
-        if let (LaneModel::Lambertian, Some(packed)) = (model, packed()) {
+        // Packed slots are looked for only where they are used: `slots` below looks
+        // again (through `SlotLanes::new`) for the other models.
+        if model == LaneModel::Lambertian
+            && let Some(packed) = PackedSlots::new(&at, hits.hit, |j| (cx.depth, path(j), light), n)
+        {
             // The render's case: all samples in one call.
             let end = count + n as usize;
             if samples.len() < end {

@@ -334,10 +334,10 @@ fn shade_ray<M: Model>(
 }
 
 /// Runs `shade(c, rays, hits, radiance, shadows)` on each [`CHUNK`] of rays and their
-/// hits' blocks in parallel, with the chunk's part of `radiance` and its shadow-ray buffer; returns each
-/// chunk's result in order. Both are the last depth's buffers, refilled so that their
-/// allocations are reused. Chunks, not rays, own the shadow-ray buffers: no allocation per
-/// ray, and a deterministic queue.
+/// hits' blocks in parallel, with the chunk's part of `radiance` and its shadow-ray
+/// buffer; returns each chunk's result in order. Both are the last depth's buffers,
+/// refilled so that their allocations are reused. Chunks, not rays, own the shadow-ray
+/// buffers: no allocation per ray, and a deterministic queue.
 pub(super) fn for_each_shading_chunk<T: Send>(
     rays: &[QueuedRay],
     hits: &SurfaceQueue,
