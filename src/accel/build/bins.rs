@@ -145,9 +145,9 @@ impl AxesBin {
     }
 }
 
-/// Rows of [`Bins`]: one per axis, and one for the unused fourth lane, whose count
-/// (never read) keeps the bin indices in four SIMD lanes in [`Bins::add`] (without
-/// that increment the compiler took the lanes apart: 3 times the build time).
+/// Rows of [`Bins`]: one per axis, and a fourth that is never binned into: a power of
+/// two of bins, so the bound check of a flat index is one mask (with three rows, a
+/// multiply and shifts per axis).
 const ROWS: usize = 4;
 
 /// Per axis, the count and box of the primitives whose centroids fall in each bin.
@@ -235,14 +235,14 @@ impl Bins {
         let counts = self.counts.as_flattened_mut();
         let boxes = self.boxes.as_flattened_mut();
         let flipped = r.flipped();
-        let k = bins_of(r.centroid(), self.min, self.scale);
-        let at: [u32; 4] = std::array::from_fn(|i| (k[i] % BINS as u32) | (i * BINS) as u32);
+        let k = bins_of(r.centroid_x4(), self.min.into(), self.scale.into());
+        let rows = i32x4::from([0, BINS as i32, 2 * BINS as i32, 0]);
+        let at = (k | rows).to_array();
         for &at in &at[..3] {
-            let at = at as usize % (ROWS * BINS);
+            let at = at as u32 as usize % (ROWS * BINS);
             counts[at] += 1;
             boxes[at].grow(flipped);
         }
-        counts[at[3] as usize % (ROWS * BINS)] += 1;
     }
 
     #[inline(always)]
@@ -305,7 +305,7 @@ pub(super) struct Plane {
 /// Bin index of a centroid coordinate: `((c - min) * scale)` truncated into
 /// `0..BINS`, NaN → 0, as `as usize` then `min(BINS - 1)` would give; clamped as a
 /// float by compare-and-select. [`first_right`] gives the same sides of a plane.
-#[inline(always)]
+#[cfg(test)]
 fn bin_position(c: f32, min: f32, scale: f32) -> f32 {
     let x = (c - min) * scale;
     let x = if x > 0.0 { x } else { 0.0 };
@@ -316,18 +316,17 @@ fn bin_position(c: f32, min: f32, scale: f32) -> f32 {
     }
 }
 
-/// [`bin_position`] truncated, lane by lane. `x as i32` would check every lane for
-/// NaN and overflow (five instructions each, a tenth of the build); `x` is already
-/// in `0..=BINS-1`, where its floor plus 2^23 holds the floor in its low mantissa
-/// bits: exact truncation, in float SIMD lanes. The floor is one `roundps` in the
-/// SSE4.1+ clones of `split` (the baseline clone calls `floorf`: the same values).
+/// [`bin_position`] truncated, lane by lane, as SIMD operations: `fast_max` / `fast_min`
+/// (`maxps` / `minps`) are exactly its two compare-and-selects, and `x` is then in
+/// `0..=BINS-1`, where `cvttps2dq` truncates exactly (`x as i32` would check every lane
+/// for NaN and overflow). Written lane by lane, the bins needed a fourth lane's count
+/// (a store per primitive, of the binning's seven) to stay in SIMD lanes.
 #[inline(always)]
-fn bins_of(c: Lanes, min: Lanes, scale: Lanes) -> [u32; 4] {
-    const MAGIC: f32 = (1u32 << 23) as f32;
-    std::array::from_fn(|i| {
-        let x = bin_position(c[i], min[i], scale[i]);
-        (x.floor() + MAGIC).to_bits() - MAGIC.to_bits()
-    })
+fn bins_of(c: f32x4, min: f32x4, scale: f32x4) -> i32x4 {
+    ((c - min) * scale)
+        .fast_max(f32x4::ZERO)
+        .fast_min(f32x4::splat((BINS - 1) as f32))
+        .fast_trunc_int()
 }
 
 /// Bit `k` set when bin `k` holds a primitive: the sign bit of `0 - count` (a count
