@@ -129,6 +129,9 @@ pub struct Wavefront {
     pub shadow_rays: ShadowQueue,
     /// Rays for the next depth.
     pub next: Vec<QueuedRay>,
+    /// Whether ray `i` of `rays` is camera sample `i`'s one ray (the camera rays, as
+    /// `generate_camera_samples` queues them): `gather_radiance` then runs in parallel.
+    pub by_sample: bool,
 }
 
 /// What a region's tracing hands the film: the radiance of each camera sample.
@@ -454,25 +457,27 @@ pub fn shade_hits(
     let wf = &mut *wf;
     let (rays, hits) = (&wf.rays, &wf.hits);
     let (radiance, shadows) = (&mut wf.ray_radiance, &mut wf.shadow_rays);
-    match (log, LaneModel::of(&cx.shading)) {
+    let hit_count = match (log, LaneModel::of(&cx.shading)) {
         // Lambertian (the render benchmark's model), Phong and Blinn-Phong: hits in lanes.
-        (None, Some(model)) => {
-            shade_chunks_in_lanes(&cx, model, rays, hits, radiance, shadows);
-        }
+        (None, Some(model)) => shade_chunks_in_lanes(&cx, model, rays, hits, radiance, shadows),
         // The other models' loop reads the model per sample (see `Shading::dispatch`).
-        (None, None) => cx.shading.dispatch(ShadeRun {
-            cx: &cx,
-            rays,
-            hits,
-            radiance,
-            shadows,
-        }),
+        (None, None) => {
+            cx.shading.dispatch(ShadeRun {
+                cx: &cx,
+                rays,
+                hits,
+                radiance,
+                shadows,
+            });
+            hits.hit_count()
+        }
         // The debug's reads the model per sample (one copy of the loop).
         (Some(mut log), _) => {
             log.light_samples = shade_chunks(&cx, cx.shading, rays, hits, radiance, shadows);
+            hits.hit_count()
         }
-    }
-    stats.record(Stage::ShadeHits, wf.hits.hit_count() as u64);
+    };
+    stats.record(Stage::ShadeHits, hit_count as u64);
 }
 
 /// Tests every shadow ray and adds the visible part of its contribution: binary
@@ -520,6 +525,20 @@ pub fn gather_radiance(wf: Res<Wavefront>, mut radiance: ResMut<SampleRadiance>)
     // The slice taken once: indexing through the `ResMut` reloaded the vector's pointer
     // and length on every ray (the stores might have aliased them).
     let values = &mut radiance.values[..];
+    if wf.by_sample {
+        // One ray per sample, in sample order: chunk by chunk in parallel, the same sums
+        // (the serial loop was 1% of the Cornell render, with the other threads idle).
+        assert_eq!(values.len(), wf.ray_radiance.len());
+        values
+            .par_chunks_mut(CHUNK)
+            .zip(wf.ray_radiance.par_chunks(CHUNK))
+            .for_each(|(values, radiance)| {
+                for (v, c) in values.iter_mut().zip(radiance) {
+                    *v += *c;
+                }
+            });
+        return;
+    }
     for (q, c) in wf.rays.iter().zip(&wf.ray_radiance) {
         values[q.slot as usize] += *c;
     }
@@ -593,6 +612,7 @@ pub fn advance_depth(mut wf: ResMut<Wavefront>) {
     std::mem::swap(&mut wf.rays, &mut wf.next);
     wf.next.clear();
     wf.depth += 1;
+    wf.by_sample = false;
 }
 
 /// Whether rays remain to be traced.
