@@ -15,6 +15,7 @@ use super::lane_models::LANES;
 use super::lights::{LightSample, Lights};
 use super::log::{HitObserver, LightObserver, RayTrace, TraceLog};
 use super::materials::Materials;
+use super::packet_hits::PacketSceneHits;
 use super::plan::RenderPlan;
 use super::shade_lanes::{LaneModel, shade_chunks_in_lanes};
 pub use super::shadow::{CHUNK, ShadowPacket, ShadowPackets, ShadowQueue, ShadowRay};
@@ -194,15 +195,16 @@ fn closest_hits_in_packets(
         .par_iter_mut()
         .zip(rays.par_chunks(PACKET))
         .with_min_len(CHUNK / PACKET)
-        .for_each(|(surfaces, rays)| {
+        // One buffer of hits per task, overwritten packet by packet.
+        .for_each_init(PacketSceneHits::default, |hits, (surfaces, rays)| {
             // Only the packet's rays are copied (the rest stay zero, never read).
             let mut packet = [Ray::new(Vec3::ZERO, Vec3::ZERO); PACKET];
             for (p, q) in packet.iter_mut().zip(rays) {
                 *p = q.ray;
             }
             let n = rays.len();
-            let hits = geometry.intersect_packet_lanes(&packet[..n], f32::INFINITY);
-            surfaces_at(geometry, &packet[..n], &hits, interpolate, surfaces);
+            geometry.intersect_packet_lanes_into(&packet[..n], f32::INFINITY, hits);
+            surfaces_at(geometry, &packet[..n], hits, interpolate, surfaces);
         });
 }
 
