@@ -208,7 +208,10 @@ pub fn run_pass(
             first_pixel: first,
             pixels: count,
         });
-        world.run_schedule(RenderPass);
+        // On a rayon worker: the region's parallel stages then start from that worker
+        // (which takes its share) instead of each waking the pool from this thread and
+        // sleeping until it ends.
+        rayon::scope(|_| world.run_schedule(RenderPass));
         control.region_done(count as u64);
         first += count;
     }

@@ -13,6 +13,7 @@ use glint::accel::{Aabb, Bvh, Instance, Ray, SplitMethod, TwoLevelBvh, WideBvh};
 use glint::scene::Mesh;
 use glint::trace::geometry::{PrimKind, SceneGeometry};
 use glint::trace::materials::Materials;
+use glint::trace::packet_hits::PacketSceneHits;
 use glint::trace::surface::surface_at;
 
 /// Spheres and cubes under translations, rotations, non-uniform and mirroring scales,
@@ -359,6 +360,9 @@ fn packet_queries_give_each_ray_its_answer_over_triangles_instances_and_spheres(
     assert!(!g.sphere_bvh.nodes.is_empty());
     let rays = mixed_rays();
     let (mut kinds, mut blocked) = ([0; 4], 0);
+    // The render's buffer of hits, reused packet after packet: the last packet's hits
+    // must not show through.
+    let mut reused = PacketSceneHits::default();
     for chunk in rays.chunks(7).flat_map(|c| [&c[..1], &c[1..]]) {
         let (r, t): (Vec<Ray>, Vec<f32>) = chunk.iter().copied().unzip();
         // One t_max per call, as the render passes it: split by bound.
@@ -374,6 +378,10 @@ fn packet_queries_give_each_ray_its_answer_over_triangles_instances_and_spheres(
             }
             let mut hits = vec![None; rs.len()];
             g.intersect_packet(&rs, bound, &mut hits);
+            g.intersect_packet_lanes_into(&rs, bound, &mut reused);
+            for (r, hit) in hits.iter().enumerate() {
+                assert_eq!(reused.get(r), *hit, "lane {r} of a reused buffer");
+            }
             let occluded = g.occluded_packet(&rs, bound);
             for (i, (ray, hit)) in rs.iter().zip(&hits).enumerate() {
                 let want = g.intersect(ray, bound, &mut ());

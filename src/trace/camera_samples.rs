@@ -134,6 +134,7 @@ pub fn generate_camera_samples(
     stats.record(Stage::GenerateCameraSamples, n as u64);
     stats.rays.camera += n as u64;
     wf.depth = 0;
+    wf.by_sample = true;
     wf.next.clear();
     radiance.first_pixel = region.first_pixel;
     radiance.values.clear();

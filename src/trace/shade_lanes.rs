@@ -344,7 +344,8 @@ fn shadow_packet(
 
 /// `shade_chunks` of a render with `model`: chunk by chunk in parallel,
 /// [`LANES`] rays at a time within a chunk, into `radiance` and `shadow_rays` (the last
-/// depth's buffers, refilled).
+/// depth's buffers, refilled); returns how many rays hit (`hits.hit_count()`), counted
+/// by the chunks rather than in a serial pass over the queue after them.
 pub(super) fn shade_chunks_in_lanes(
     cx: &ShadeContext,
     model: LaneModel,
@@ -352,8 +353,8 @@ pub(super) fn shade_chunks_in_lanes(
     hits: &SurfaceQueue,
     radiance: &mut Vec<Vec3>,
     shadow_rays: &mut ShadowQueue,
-) {
-    for_each_shading_chunk(
+) -> usize {
+    let hit_counts = for_each_shading_chunk(
         rays,
         hits,
         radiance,
@@ -385,8 +386,10 @@ pub(super) fn shade_chunks_in_lanes(
                     &mut scratch,
                 );
             }
+            hits.iter().map(|b| b.hit.count_ones() as usize).sum()
         },
     );
+    hit_counts.iter().sum()
 }
 
 #[cfg(test)]
@@ -647,7 +650,9 @@ mod tests {
                         shade_chunks::<(), _>(&cx, cx.shading, &rays, &hits, &mut r0, &mut s0);
                         let (mut r1, mut s1) = (Vec::new(), ShadowQueue::default());
                         let lane_model = LaneModel::of(&cx.shading).unwrap();
-                        shade_chunks_in_lanes(&cx, lane_model, &rays, &hits, &mut r1, &mut s1);
+                        let hit_count =
+                            shade_chunks_in_lanes(&cx, lane_model, &rays, &hits, &mut r1, &mut s1);
+                        assert_eq!(hit_count, hits.hit_count());
                         assert_eq!(
                             bits(&r1, &s1),
                             bits(&r0, &s0),

@@ -15,6 +15,7 @@ use super::lane_models::LANES;
 use super::lights::{LightSample, Lights};
 use super::log::{HitObserver, LightObserver, RayTrace, TraceLog};
 use super::materials::Materials;
+use super::packet_hits::PacketSceneHits;
 use super::plan::RenderPlan;
 use super::shade_lanes::{LaneModel, shade_chunks_in_lanes};
 pub use super::shadow::{CHUNK, ShadowPacket, ShadowPackets, ShadowQueue, ShadowRay};
@@ -129,6 +130,9 @@ pub struct Wavefront {
     pub shadow_rays: ShadowQueue,
     /// Rays for the next depth.
     pub next: Vec<QueuedRay>,
+    /// Whether ray `i` of `rays` is camera sample `i`'s one ray (the camera rays, as
+    /// `generate_camera_samples` queues them): `gather_radiance` then runs in parallel.
+    pub by_sample: bool,
 }
 
 /// What a region's tracing hands the film: the radiance of each camera sample.
@@ -191,15 +195,16 @@ fn closest_hits_in_packets(
         .par_iter_mut()
         .zip(rays.par_chunks(PACKET))
         .with_min_len(CHUNK / PACKET)
-        .for_each(|(surfaces, rays)| {
+        // One buffer of hits per task, overwritten packet by packet.
+        .for_each_init(PacketSceneHits::default, |hits, (surfaces, rays)| {
             // Only the packet's rays are copied (the rest stay zero, never read).
             let mut packet = [Ray::new(Vec3::ZERO, Vec3::ZERO); PACKET];
             for (p, q) in packet.iter_mut().zip(rays) {
                 *p = q.ray;
             }
             let n = rays.len();
-            let hits = geometry.intersect_packet_lanes(&packet[..n], f32::INFINITY);
-            surfaces_at(geometry, &packet[..n], &hits, interpolate, surfaces);
+            geometry.intersect_packet_lanes_into(&packet[..n], f32::INFINITY, hits);
+            surfaces_at(geometry, &packet[..n], hits, interpolate, surfaces);
         });
 }
 
@@ -454,25 +459,27 @@ pub fn shade_hits(
     let wf = &mut *wf;
     let (rays, hits) = (&wf.rays, &wf.hits);
     let (radiance, shadows) = (&mut wf.ray_radiance, &mut wf.shadow_rays);
-    match (log, LaneModel::of(&cx.shading)) {
+    let hit_count = match (log, LaneModel::of(&cx.shading)) {
         // Lambertian (the render benchmark's model), Phong and Blinn-Phong: hits in lanes.
-        (None, Some(model)) => {
-            shade_chunks_in_lanes(&cx, model, rays, hits, radiance, shadows);
-        }
+        (None, Some(model)) => shade_chunks_in_lanes(&cx, model, rays, hits, radiance, shadows),
         // The other models' loop reads the model per sample (see `Shading::dispatch`).
-        (None, None) => cx.shading.dispatch(ShadeRun {
-            cx: &cx,
-            rays,
-            hits,
-            radiance,
-            shadows,
-        }),
+        (None, None) => {
+            cx.shading.dispatch(ShadeRun {
+                cx: &cx,
+                rays,
+                hits,
+                radiance,
+                shadows,
+            });
+            hits.hit_count()
+        }
         // The debug's reads the model per sample (one copy of the loop).
         (Some(mut log), _) => {
             log.light_samples = shade_chunks(&cx, cx.shading, rays, hits, radiance, shadows);
+            hits.hit_count()
         }
-    }
-    stats.record(Stage::ShadeHits, wf.hits.hit_count() as u64);
+    };
+    stats.record(Stage::ShadeHits, hit_count as u64);
 }
 
 /// Tests every shadow ray and adds the visible part of its contribution: binary
@@ -520,6 +527,20 @@ pub fn gather_radiance(wf: Res<Wavefront>, mut radiance: ResMut<SampleRadiance>)
     // The slice taken once: indexing through the `ResMut` reloaded the vector's pointer
     // and length on every ray (the stores might have aliased them).
     let values = &mut radiance.values[..];
+    if wf.by_sample {
+        // One ray per sample, in sample order: chunk by chunk in parallel, the same sums
+        // (the serial loop was 1% of the Cornell render, with the other threads idle).
+        assert_eq!(values.len(), wf.ray_radiance.len());
+        values
+            .par_chunks_mut(CHUNK)
+            .zip(wf.ray_radiance.par_chunks(CHUNK))
+            .for_each(|(values, radiance)| {
+                for (v, c) in values.iter_mut().zip(radiance) {
+                    *v += *c;
+                }
+            });
+        return;
+    }
     for (q, c) in wf.rays.iter().zip(&wf.ray_radiance) {
         values[q.slot as usize] += *c;
     }
@@ -593,6 +614,7 @@ pub fn advance_depth(mut wf: ResMut<Wavefront>) {
     std::mem::swap(&mut wf.rays, &mut wf.next);
     wf.next.clear();
     wf.depth += 1;
+    wf.by_sample = false;
 }
 
 /// Whether rays remain to be traced.

@@ -258,6 +258,32 @@ fn gather_radiance_adds_each_ray_to_its_camera_sample() {
     );
 }
 
+#[test]
+fn gather_radiance_of_camera_rays_adds_each_ray_to_its_own_sample() {
+    // Rays in sample order over several parallel chunks (`by_sample`): ray i into sample i.
+    let n = 3 * 1024 + 5;
+    let ray_radiance: Vec<Vec3> = (0..n).map(|i| Vec3::new(i as f32, 0.5, -1.0)).collect();
+    let wf = Wavefront {
+        rays: (0..n as u32)
+            .map(|i| queued(Vec3::ZERO, Vec3::Z, i))
+            .collect(),
+        ray_radiance: ray_radiance.clone(),
+        by_sample: true,
+        ..Wavefront::default()
+    };
+    let before: Vec<Vec3> = (0..n).map(|i| Vec3::splat(0.25 * i as f32)).collect();
+    let radiance = SampleRadiance {
+        first_pixel: 3,
+        values: before.clone(),
+    };
+    let mut world = world![wf, radiance];
+    run(&mut world, gather_radiance);
+    let values = &world.resource::<SampleRadiance>().values;
+    for i in 0..n {
+        assert_eq!(values[i], before[i] + ray_radiance[i], "sample {i}");
+    }
+}
+
 /// One hit on a material with `ks` and `alpha` at `depth`, and one miss.
 fn spawn_world(ks: f32, alpha: f32, depth: u32) -> bevy_ecs::world::World {
     let mut wf = hit_on_unit_sphere();
@@ -356,11 +382,14 @@ fn advance_depth_makes_the_next_rays_current() {
         depth: 2,
         rays: vec![queued(Vec3::ZERO, Vec3::Y, 0); 2],
         next: vec![next],
+        by_sample: true,
         ..Wavefront::default()
     };
     let mut world = world![wf];
     run(&mut world, advance_depth);
     let wf = world.resource::<Wavefront>();
+    // The next depth's rays are children: no longer one per sample in sample order.
+    assert!(!wf.by_sample);
     assert_eq!(wf.depth, 3);
     assert_eq!(wf.rays, [next]);
     assert!(wf.next.is_empty());

@@ -47,6 +47,8 @@ fn generate_camera_samples_queues_one_ray_through_each_pixel_centre() {
     run(&mut world, generate_camera_samples);
     let wf = world.resource::<Wavefront>();
     assert_eq!(wf.depth, 0);
+    // Ray i is sample i's (checked below): `gather_radiance` may add them in parallel.
+    assert!(wf.by_sample);
     // Row 0 is the top; pixel centres sit half way to the image plane's edges.
     let centres = [(-0.5, 0.5), (0.5, 0.5), (-0.5, -0.5), (0.5, -0.5)];
     assert_eq!(wf.rays.len(), 4);
