@@ -82,7 +82,7 @@ pub struct LeafTris {
     pub groups: Vec<TriGroup>,
 }
 
-/// [`LeafTris::prims`] of a padding lane: no triangle (a triangle count is below it).
+/// [`TriGroup::prim`] of a padding lane: no triangle (a triangle count is below it).
 pub const NO_PRIM: u32 = u32::MAX;
 
 /// Groups a leaf of `count` triangles fills.
