@@ -99,13 +99,15 @@ pub fn describe(renderer: &mut Renderer) -> Result<String> {
         // Per flattened triangle: where the accel memory goes.
         let per = |bytes: usize| bytes as f64 / wide.triangles as f64;
         let padding = wide.leaves.groups.len() * LANES - wide.triangles;
+        // A group's vertices, without its lanes' triangle indices (reported apart).
+        let vertex_bytes = size_of::<TriGroup>() - size_of::<[u32; LANES]>();
         let _ = writeln!(
             o,
             "  wide BVH      per flattened triangle: nodes {:.1}, leaf vertices {:.1} ({:.1} of it NaN padding), indices {:.1} ({:.1} of it padding)",
             per(size_of_val(wide.nodes.as_slice())),
-            per(size_of_val(wide.leaves.groups.as_slice())),
-            per(padding * size_of::<TriGroup>() / LANES),
-            per(size_of_val(wide.leaves.prims.as_slice())),
+            per(wide.leaves.groups.len() * vertex_bytes),
+            per(padding * vertex_bytes / LANES),
+            per(wide.leaves.groups.len() * size_of::<[u32; LANES]>()),
             per(padding * size_of::<u32>()),
         );
     }

@@ -261,7 +261,7 @@ fn the_debug_keeps_the_binary_triangle_bvh_a_render_drops() {
     let g = s.renderer.world.resource::<SceneGeometry>();
     assert!(!g.tri_bvh.nodes.is_empty());
     // The wide tree's lanes hold the binary tree's triangle order, padding aside.
-    let lanes = g.tri_wide.leaves.prims.iter().copied();
+    let lanes = g.tri_wide.leaves.prims();
     let in_lanes: Vec<u32> = lanes
         .filter(|&p| p != glint::accel::leaf::NO_PRIM)
         .collect();

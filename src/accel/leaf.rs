@@ -26,16 +26,27 @@ pub const LANES: usize = 4;
 /// Lane mask of a full group.
 const ALL_LANES: u32 = (1 << LANES) - 1;
 
-/// Up to `LANES` triangles, structure-of-arrays.
+/// Up to `LANES` triangles, structure-of-arrays, and the caller's index of each.
+///
+/// The indices sit in the group (as Embree's `Triangle4` keeps its `primID`s), not in an
+/// array of their own: the closest-hit query read its hit's index from that array once
+/// at the end, a cache miss on which perf put 7% of the traversal's samples, where here
+/// it shares a cache line with the vertices' last row, which the leaf test has just
+/// read. 160 bytes aligned to 32, so that the indices and that row are always in one
+/// line (for no memory: the array held as many indices).
 #[derive(Clone, Copy, Debug)]
+#[repr(C, align(32))]
 pub struct TriGroup {
     /// Vertex coordinates: `v[vertex][axis][lane]`; NaN in padding lanes.
     pub v: [[[f32; LANES]; 3]; 3],
+    /// The caller's index of the triangle in each lane; [`NO_PRIM`] in padding lanes.
+    pub prim: [u32; LANES],
 }
 
 impl TriGroup {
-    const PADDING: TriGroup = TriGroup {
+    pub(super) const PADDING: TriGroup = TriGroup {
         v: [[[f32::NAN; LANES]; 3]; 3],
+        prim: [NO_PRIM; LANES],
     };
 
     /// The vertices of the triangle in `lane`.
@@ -63,16 +74,15 @@ impl TriGroup {
 /// its triangle count (see [`leaf_lane`]).
 #[derive(Clone, Debug, Default)]
 pub struct LeafTris {
-    /// The groups, leaf after leaf in the order of their triangle slots.
+    /// The groups, leaf after leaf in the order of their triangle slots, each with its
+    /// lanes' triangle indices ([`TriGroup::prim`]): a hit's lane names its triangle
+    /// with one load. Per lane rather than per triangle plus each group's first slot:
+    /// smaller while groups average less than one padding lane (Sponza 64.5 -> 63.8
+    /// bytes per triangle).
     pub groups: Vec<TriGroup>,
-    /// The caller's index of the triangle in each lane, `group * LANES + lane`, and
-    /// [`NO_PRIM`] in padding lanes: a hit's lane names its triangle with one load. Per
-    /// lane rather than per triangle plus each group's first slot: smaller while groups
-    /// average less than one padding lane (Sponza 64.5 -> 63.8 bytes per triangle).
-    pub prims: Vec<u32>,
 }
 
-/// [`LeafTris::prims`] of a padding lane: no triangle (a triangle count is below it).
+/// [`TriGroup::prim`] of a padding lane: no triangle (a triangle count is below it).
 pub const NO_PRIM: u32 = u32::MAX;
 
 /// Groups a leaf of `count` triangles fills.
@@ -118,7 +128,6 @@ impl LeafTris {
     pub fn with_capacity(groups: usize) -> LeafTris {
         LeafTris {
             groups: Vec::with_capacity(groups),
-            prims: Vec::with_capacity(groups * LANES),
         }
     }
 
@@ -137,22 +146,32 @@ impl LeafTris {
         let mut degenerate = false;
         for start in (slot..end).step_by(LANES) {
             let mut group = TriGroup::PADDING;
-            let mut lanes = [NO_PRIM; LANES];
             for k in start..(start + LANES).min(end) {
                 let tri @ [a, b, c] = positions[prims[k] as usize];
                 degenerate |= is_degenerate(a, b, c);
                 group.set_triangle(k - start, tri);
-                lanes[k - start] = prims[k];
+                group.prim[k - start] = prims[k];
             }
             self.groups.push(group);
-            self.prims.extend_from_slice(&lanes);
         }
         leaf_lane(first_group, count, degenerate)
     }
 
     /// Bytes held.
     pub fn bytes(&self) -> usize {
-        size_of_val(self.groups.as_slice()) + size_of_val(self.prims.as_slice())
+        size_of_val(self.groups.as_slice())
+    }
+
+    /// The caller's index of the triangle in lane `lane` (`group * LANES + lane`), or
+    /// [`NO_PRIM`] for a padding lane.
+    #[inline(always)]
+    pub fn prim(&self, lane: usize) -> u32 {
+        self.groups[lane / LANES].prim[lane % LANES]
+    }
+
+    /// Every lane's triangle index ([`LeafTris::prim`]), in lane order.
+    pub fn prims(&self) -> impl Iterator<Item = u32> + '_ {
+        self.groups.iter().flat_map(|g| g.prim)
     }
 
     /// Checks the leaf at group `first_group` with the lane count `count` ([`leaf_lane`]):
@@ -170,7 +189,7 @@ impl LeafTris {
         let (count, flagged) = leaf_count(count);
         let mut degenerate = false;
         let groups = first_group..first_group + groups_for(count);
-        if groups.end > self.groups.len() || self.prims.len() != self.groups.len() * LANES {
+        if groups.end > self.groups.len() {
             return Err(format!("leaf at group {first_group}: past the end"));
         }
         for (i, g) in groups.enumerate() {
@@ -179,7 +198,7 @@ impl LeafTris {
             }
             let mask = lane_mask(i, count);
             for l in 0..LANES {
-                let prim = self.prims[g * LANES + l];
+                let prim = self.groups[g].prim[l];
                 if mask & (1 << l) == 0 {
                     if !self.groups[g].is_padding(l) || prim != NO_PRIM {
                         return Err(format!(

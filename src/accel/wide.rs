@@ -29,8 +29,8 @@ use glam::Vec3;
 pub struct WideBvh {
     /// Nodes, each after its parent; empty for no triangles.
     pub nodes: Vec<WideNode>,
-    /// Triangle vertices in leaf order, in groups of `leaf::LANES`, and the caller's
-    /// index of each.
+    /// Triangle vertices in leaf order, in groups of `leaf::LANES`, each with the
+    /// caller's index of its triangles.
     pub leaves: LeafTris,
     /// Triangles held (lanes that are not padding).
     pub triangles: usize,
@@ -101,7 +101,7 @@ impl WideBvh {
     /// holding a triangle, not padding).
     #[inline(always)]
     pub fn prim_at(&self, group: usize, lane: usize) -> u32 {
-        self.leaves.prims[group * LANES + lane]
+        self.leaves.groups[group].prim[lane]
     }
 
     /// The vertices of the triangle at `lane` (`group * LANES + lane`, as
@@ -116,7 +116,7 @@ impl WideBvh {
     /// computed, not held, as a render reaches a triangle's vertices through its hit.
     pub fn prim_lanes(&self) -> Vec<u32> {
         let mut lanes = vec![0; self.triangles];
-        for (lane, &p) in self.leaves.prims.iter().enumerate() {
+        for (lane, p) in self.leaves.prims().enumerate() {
             if p != NO_PRIM {
                 lanes[p as usize] = lane as u32;
             }

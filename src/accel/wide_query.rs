@@ -64,10 +64,9 @@ impl RayLeaves<'_> {
     /// Tests the triangles of the leaf at `group` with the lane count `count`: the SoA
     /// prefilter, then the exact test's answer on each lane it keeps (from the lane's
     /// values where they decide it), both against `*bound`;
-    /// `hit(lane, hit, bound)` may lower the bound and returns true to stop
-    /// (`lane`: `group * LANES + lane`, where the triangle's vertices are and, in
-    /// `leaves.prims`, its index: read by the caller only where it needs it, as that
-    /// load from an array of its own missed the cache on a hit).
+    /// `hit(lane, prim, hit, bound)` may lower the bound and returns true to stop
+    /// (`lane`: `group * LANES + lane`, where the triangle's vertices are; `prim`: the
+    /// caller's index of the triangle, read from the group the test has just read).
     /// Any-hit queries too take a lane's hit from the prefilter's values: the scalar
     /// test on each candidate lane cost the shadow rays 8% more instructions.
     #[inline(always)]
@@ -76,7 +75,7 @@ impl RayLeaves<'_> {
         group: usize,
         count: u32,
         bound: &mut f32,
-        mut hit: impl FnMut(usize, &TriangleHit, &mut f32) -> bool,
+        mut hit: impl FnMut(usize, u32, &TriangleHit, &mut f32) -> bool,
     ) -> bool {
         let (wide, ray) = (self.wide, self.ray);
         let (count, degenerate) = leaf_count(count);
@@ -94,7 +93,7 @@ impl RayLeaves<'_> {
                 let Some(h) = h else {
                     continue;
                 };
-                if hit((group + i) * LANES + lane, &h, bound) {
+                if hit((group + i) * LANES + lane, g.prim[lane % LANES], &h, bound) {
                     return true;
                 }
             }
@@ -106,11 +105,9 @@ impl RayLeaves<'_> {
 /// The closest-hit query's leaf test and best hit so far.
 struct ClosestLeaves<'a> {
     leaves: RayLeaves<'a>,
-    /// The best hit: where the triangle sits in the leaves (`group * LANES + lane`)
-    /// and the hit. Its index is read from `prims` only on a tie and once at the end:
-    /// reading it at each closer hit stalled on a cache miss (about 9% of the leaf
-    /// test's time in perf).
-    best: Option<(usize, TriangleHit)>,
+    /// The best hit: where the triangle sits in the leaves (`group * LANES + lane`), its
+    /// index and the hit.
+    best: Option<(usize, u32, TriangleHit)>,
     /// The query's own t_max.
     limit: f32,
     /// Past the best t so far by more than the rounding of the triangle test's scaled
@@ -125,16 +122,15 @@ impl LeafVisitor for ClosestLeaves<'_> {
     #[inline(always)]
     fn leaf(&mut self, group: usize, count: u32, t_max: &mut f32) -> bool {
         let (best, limit) = (&mut self.best, self.limit);
-        let prims = &self.leaves.wide.leaves.prims;
         self.leaves
-            .hits(group, count, &mut self.bound, |lane, h, bound| {
-                let closer = |&(b, bh): &(usize, TriangleHit)| {
-                    h.t < bh.t || (h.t == bh.t && prims[lane] < prims[b])
+            .hits(group, count, &mut self.bound, |lane, prim, h, bound| {
+                let closer = |&(_, bp, bh): &(usize, u32, TriangleHit)| {
+                    h.t < bh.t || (h.t == bh.t && prim < bp)
                 };
                 if best.as_ref().is_none_or(closer) {
                     *t_max = h.t;
                     *bound = three_ulps_up(h.t).min(limit);
-                    *best = Some((lane, *h));
+                    *best = Some((lane, prim, *h));
                 }
                 false
             })
@@ -184,10 +180,9 @@ impl<F: FnMut(u32, &TriangleHit) -> bool> LeafVisitor for AnyLeaves<'_, F> {
     #[inline(always)]
     fn leaf(&mut self, group: usize, count: u32, _: &mut f32) -> bool {
         let visit = &mut self.visit;
-        let prims = &self.leaves.wide.leaves.prims;
         self.leaves
-            .hits(group, count, &mut self.bound, |lane, h, _| {
-                visit(prims[lane], h)
+            .hits(group, count, &mut self.bound, |_, prim, h, _| {
+                visit(prim, h)
             })
     }
 }
@@ -249,8 +244,8 @@ impl WideBvh {
             line,
         };
         self.traverse::<true>(&boxes, &mut cull, &mut visitor);
-        let (lane, h) = leaves.best?;
-        Some((self.leaves.prims[lane], lane as u32, h))
+        let (lane, prim, h) = leaves.best?;
+        Some((prim, lane as u32, h))
     }
 
     /// Visits triangles the ray meets in (0, t_max), in no particular order, until
@@ -451,31 +446,20 @@ mod tests {
         lines
     }
 
-    /// Every line of an item's bytes is prefetched: a leaf group (144 bytes, at every
-    /// offset from a line that its alignment of 4 allows) and a node (whole lines, each
-    /// named once).
+    /// Every line of an item's bytes is prefetched: a leaf group (160 bytes, at both
+    /// offsets from a line that its alignment of 32 allows) and a node (whole lines,
+    /// each named once).
     #[test]
     fn each_line_names_every_line_of_an_item() {
-        /// 148 bytes: successive groups start 20 bytes further along a line, so 16 of
-        /// them start at each of the 16 multiples of 4 below 64.
-        #[derive(Clone)]
-        #[repr(C)]
-        struct Shifted(u32, TriGroup);
-        let groups = vec![
-            Shifted(
-                0,
-                TriGroup {
-                    v: [[[0.0; 4]; 3]; 3]
-                }
-            );
-            16
-        ];
+        // 160 bytes: successive groups start 32 bytes further along a line, so they
+        // start at both multiples of 32 below 64.
+        let groups = vec![TriGroup::PADDING; 4];
         let offsets: std::collections::HashSet<usize> = groups
             .iter()
-            .map(|s| &s.1 as *const TriGroup as usize % 64)
+            .map(|g| g as *const TriGroup as usize % 64)
             .collect();
-        assert_eq!(offsets.len(), 16);
-        for Shifted(_, g) in &groups {
+        assert_eq!(offsets.len(), 2);
+        for g in &groups {
             let start = g as *const TriGroup as usize;
             let want: Vec<usize> =
                 (start / 64..=(start + size_of::<TriGroup>() - 1) / 64).collect();

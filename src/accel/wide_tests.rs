@@ -129,24 +129,24 @@ fn validate_catches_a_wrong_triangle_index_in_a_lane() {
     let tris = random_tris(500, 4);
     let (_, wide) = both(&tris, SplitMethod::SahBinned);
     wide.validate(&tris).unwrap();
-    let prims = &wide.leaves.prims;
+    let prims: Vec<u32> = wide.leaves.prims().collect();
     let padding = prims.iter().position(|&p| p == NO_PRIM).unwrap();
+    fn prim(w: &mut WideBvh, lane: usize) -> &mut u32 {
+        &mut w.leaves.groups[lane / LANES].prim[lane % LANES]
+    }
     let mut broken = Vec::new();
     // Two lanes' indices swapped: each names the other's vertices.
     let mut bad = wide.clone();
-    bad.leaves.prims.swap(0, 1);
+    bad.leaves.groups[0].prim.swap(0, 1);
     broken.push(bad);
     // A padding lane naming a triangle, a triangle's lane naming none.
     let mut bad = wide.clone();
-    bad.leaves.prims[padding] = prims[0];
+    *prim(&mut bad, padding) = prims[0];
     broken.push(bad);
     let mut bad = wide.clone();
-    bad.leaves.prims[0] = NO_PRIM;
+    *prim(&mut bad, 0) = NO_PRIM;
     broken.push(bad);
-    // One lane too few, a wrong count.
-    let mut bad = wide.clone();
-    bad.leaves.prims.pop();
-    broken.push(bad);
+    // A wrong count.
     let mut bad = wide.clone();
     bad.triangles -= 1;
     broken.push(bad);

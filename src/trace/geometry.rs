@@ -276,7 +276,7 @@ impl SceneGeometry {
         }
         // Padding lanes hold `NO_PRIM`, which is no triangle's index.
         (prim != NO_PRIM)
-            .then(|| self.tri_wide.leaves.prims.iter().position(|&p| p == prim))
+            .then(|| self.tri_wide.leaves.prims().position(|p| p == prim))
             .flatten()
             .unwrap_or_else(|| panic!("triangle {prim} is not in the scene's wide BVH"))
             as u32
