@@ -73,6 +73,10 @@ impl SegmentBox {
         let mut bad = [0u32; PACKET];
         for r in 0..PACKET {
             let on = rays.active & (1 << r) != 0;
+            // An inactive lane's corners become (inf, -inf) through a maximum and a
+            // minimum, not a select: the compiler made the selects masked stores,
+            // which the loads of the reduction below waited for.
+            let least = if on { f32::NEG_INFINITY } else { f32::INFINITY };
             let reach = t_max[r] * BOX_MARGIN * (1.0 + WIDEN);
             let mut ok = (LEAST_REACH..=MAX_REACH).contains(&reach);
             for a in 0..3 {
@@ -80,10 +84,9 @@ impl SegmentBox {
                 ok &= (o.abs() <= MAX_ORIGIN) & (d.abs() <= MAX_DIR);
                 let end = o + d * reach;
                 let pad = end.abs() * WIDEN + TINY;
-                let near = min(o - ORIGIN_PAD, end - pad);
-                let far = max(o + ORIGIN_PAD, end + pad);
-                lo[a][r] = if on { near } else { f32::INFINITY };
-                hi[a][r] = if on { far } else { f32::NEG_INFINITY };
+                // (An active lane's values are not NaN, or `ok` is false.)
+                lo[a][r] = max(min(o - ORIGIN_PAD, end - pad), least);
+                hi[a][r] = min(max(o + ORIGIN_PAD, end + pad), -least);
             }
             bad[r] = ((on & !ok) as u32).wrapping_neg();
         }
