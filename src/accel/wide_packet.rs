@@ -19,6 +19,9 @@
 //!   division; the scalar test (`intersect_triangle_flagged`, with the leaf's
 //!   degenerate flag) decides each (ray, triangle) it keeps, and a ray leaves the
 //!   packet's active mask at its first hit.
+//! - The any-hit query first culls the root's children by the box of the packet's ray
+//!   segments (`segment_box`), which drops only children the box test rejects for
+//!   every ray; a packet left with none ends there, before any per-ray setup.
 
 use arrayvec::ArrayVec;
 use glam::Vec3;
