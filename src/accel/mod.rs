@@ -26,6 +26,7 @@ pub mod bvh;
 pub mod instance;
 pub mod leaf;
 mod ray_lanes;
+mod segment_box;
 pub mod sphere;
 pub mod traverse;
 pub mod triangle;

@@ -19,6 +19,9 @@
 //!   division; the scalar test (`intersect_triangle_flagged`, with the leaf's
 //!   degenerate flag) decides each (ray, triangle) it keeps, and a ray leaves the
 //!   packet's active mask at its first hit.
+//! - The any-hit query first culls the root's children by the box of the packet's ray
+//!   segments (`segment_box`), which drops only children the box test rejects for
+//!   every ray; a packet left with none ends there, before any per-ray setup.
 
 use arrayvec::ArrayVec;
 use glam::Vec3;
@@ -27,6 +30,7 @@ use wide::u32x8;
 use super::bvh::MAX_DEPTH;
 use super::leaf::{LANES, LaneValues, TriGroup, groups_for, leaf_count};
 use super::ray_lanes::Lanes;
+use super::segment_box::SegmentBox;
 use super::triangle::{RayShear, TriangleHit, intersect_triangle_flagged};
 use super::wide_node::{EMPTY, WIDTH, WideNode, leaf_lanes};
 use super::wide_query::three_ulps_up;
@@ -471,13 +475,22 @@ impl WideBvh {
         if self.nodes.is_empty() || rays.active == 0 {
             return 0;
         }
+        // The root's children that some ray may meet: none (most shadow packets of a
+        // room split into walls and contents) ends the query before any setup.
+        let root = match SegmentBox::of(rays, t_max) {
+            Some(b) => b.children_met(&self.nodes[0]),
+            None => (1 << WIDTH) - 1,
+        };
+        if root & used_lanes(&self.nodes[0]) == 0 {
+            return 0;
+        }
         let p = PacketRays::from_lanes(rays, t_max);
         let mut todo = p.active;
         let mut occluded = 0;
         while todo != 0 {
             let first = todo.trailing_zeros() as usize;
             let class = p.same_axes(first) & todo;
-            occluded |= self.occluded_sub_packet(&p, &p.shear(first), class);
+            occluded |= self.occluded_sub_packet(&p, &p.shear(first), class, root);
             todo &= !class;
         }
         occluded
@@ -486,8 +499,9 @@ impl WideBvh {
     /// The rays of `rays` (all of sub-packet `s`) that a triangle occludes: the any-hit
     /// traversal of [`WideBvh::traverse`] with a mask of rays per entry, leaves before
     /// interior children, until every ray is occluded or the stack is empty.
+    /// Only the root's children in `root` are tested.
     #[inline(always)]
-    fn occluded_sub_packet(&self, p: &PacketRays, s: &Shear, rays: u32) -> u32 {
+    fn occluded_sub_packet(&self, p: &PacketRays, s: &Shear, rays: u32, root: u32) -> u32 {
         let mut active = rays;
         let mut stack: ArrayVec<(u32, u32), STACK_SIZE> = ArrayVec::new();
         let mut next = Some((0u32, active));
@@ -501,7 +515,7 @@ impl WideBvh {
                 continue;
             }
             let node = &self.nodes[index as usize];
-            let used = used_lanes(node);
+            let used = used_lanes(node) & if index == 0 { root } else { u32::MAX };
             let mut hits = [0u32; WIDTH];
             let mut lanes = used;
             while lanes != 0 {

