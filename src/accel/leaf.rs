@@ -437,7 +437,7 @@ impl<const N: usize> LaneValues<N> {
 impl Candidates {
     /// The scalar test, [`super::intersect_triangle_sheared`], on lane `lane` (in
     /// `mask`) of group `g`, with a bound `t_max` at most the prefilter's: see
-    /// [`LaneValues::decide`]. The vertices are read only where they are needed: the
+    /// `LaneValues::decide`. The vertices are read only where they are needed: the
     /// scalar test, and the exact degenerate test in leaves that hold a degenerate
     /// triangle.
     #[inline(always)]

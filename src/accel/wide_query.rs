@@ -278,7 +278,7 @@ impl WideBvh {
         self.traverse::<false>(&boxes, &mut cull, &mut leaves)
     }
 
-    /// For up to [`PACKET`](super::PACKET) rays at once (a packet, traced with one ray
+    /// For up to [`PACKET`] rays at once (a packet, traced with one ray
     /// per SIMD lane; see `accel::wide_packet`): bit `i` is set when a triangle lies on
     /// `rays[i]` in (0, `t_max[i]`), exactly when `any_hit(&rays[i], t_max[i], |_, _|
     /// true)` is true.
@@ -299,7 +299,7 @@ impl WideBvh {
         occluded_lanes_dispatched(self, rays, t_max)
     }
 
-    /// For up to [`PACKET`](super::PACKET) rays at once (a packet; see
+    /// For up to [`PACKET`] rays at once (a packet; see
     /// `accel::wide_packet`): entry `i` is exactly `closest_hit_at(&rays[i], t_max[i])`.
     pub fn closest_packet(&self, rays: &[Ray], t_max: &[f32]) -> PacketHits {
         assert!(

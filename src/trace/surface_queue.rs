@@ -64,7 +64,7 @@ impl SurfaceBlock {
 }
 
 /// Each ray's closest hit as its shading point (`None` for a miss), in queue order,
-/// stored in blocks of [`LANES`] rays. No hit bit is set at or past `len`.
+/// stored in blocks of `LANES` (8) rays. No hit bit is set at or past `len`.
 #[derive(Clone, Default)]
 pub struct SurfaceQueue {
     blocks: Vec<SurfaceBlock>,
