@@ -363,7 +363,11 @@ impl Renderer {
     /// Traces sample index `sample` for every pixel, region by region; `progress`
     /// receives the pixels done after each region. An interrupt leaves the pass
     /// partial: the first regions hold one sample more than the others.
-    pub fn render_pass(&mut self, sample: u32, progress: &mut dyn FnMut(u64)) -> Result<()> {
+    pub fn render_pass(
+        &mut self,
+        sample: u32,
+        progress: &mut (dyn FnMut(u64) + Send),
+    ) -> Result<()> {
         self.prepare()?;
         let pixels = self.all_pixels();
         let mut control = Control {
@@ -383,7 +387,7 @@ impl Renderer {
     pub fn render(
         &mut self,
         budget: Option<Duration>,
-        progress: &mut dyn FnMut(u64),
+        progress: &mut (dyn FnMut(u64) + Send),
     ) -> Result<RenderSummary> {
         self.prepare()?;
         let start = self.started.unwrap_or_else(Instant::now);
@@ -415,7 +419,7 @@ impl Renderer {
     pub fn render_until(
         &mut self,
         rule: &StopRule,
-        progress: &mut dyn FnMut(u64),
+        progress: &mut (dyn FnMut(u64) + Send),
     ) -> Result<RenderSummary> {
         if rule.target_rmse.is_none() && rule.target_rel_error.is_none() {
             return self.render(rule.time, progress);
@@ -433,24 +437,27 @@ impl Renderer {
             progress,
         };
         let mut done = 0u32;
-        let ended = loop {
-            if !run_pass(&mut self.world, done, pixels.clone(), &mut control)? {
-                break Ended::Interrupt;
+        // On one rayon worker, as in `run_passes`: one hand-off per render, not per region.
+        let ended = rayon::scope(|_| -> Result<Ended> {
+            loop {
+                if !run_pass(&mut self.world, done, pixels.clone(), &mut control)? {
+                    return Ok(Ended::Interrupt);
+                }
+                done += 1;
+                if done.is_multiple_of(step)
+                    && done >= MIN_TARGET_SPP
+                    && rule.reached(self.film().error_estimate(method).as_ref())
+                {
+                    return Ok(Ended::Target);
+                }
+                if rule.time.is_some_and(|t| start.elapsed() >= t) {
+                    return Ok(Ended::Time);
+                }
+                if done == u32::MAX {
+                    return Ok(Ended::AllSamples);
+                }
             }
-            done += 1;
-            if done.is_multiple_of(step)
-                && done >= MIN_TARGET_SPP
-                && rule.reached(self.film().error_estimate(method).as_ref())
-            {
-                break Ended::Target;
-            }
-            if rule.time.is_some_and(|t| start.elapsed() >= t) {
-                break Ended::Time;
-            }
-            if done == u32::MAX {
-                break Ended::AllSamples;
-            }
-        };
+        })?;
         let mut summary = self.summary(done, start.elapsed());
         summary.interrupted = ended == Ended::Interrupt;
         summary.ended = ended;
@@ -470,7 +477,7 @@ impl Renderer {
         &mut self,
         samples: std::ops::Range<u32>,
         crop: Crop,
-        progress: &mut dyn FnMut(u64),
+        progress: &mut (dyn FnMut(u64) + Send),
     ) -> Result<RenderSummary> {
         self.prepare()?;
         let start = self.started.unwrap_or_else(Instant::now);
@@ -491,14 +498,18 @@ impl Renderer {
         };
         let rows = crop.pixel_ranges(width);
         let mut done = 0;
-        'passes: for sample in samples.clone() {
-            for pixels in &rows {
-                if !run_pass(&mut self.world, sample, pixels.clone(), &mut control)? {
-                    break 'passes;
+        // On one rayon worker, as in `run_passes`: one hand-off per render, not per region.
+        rayon::scope(|_| -> Result<()> {
+            'passes: for sample in samples.clone() {
+                for pixels in &rows {
+                    if !run_pass(&mut self.world, sample, pixels.clone(), &mut control)? {
+                        break 'passes;
+                    }
                 }
+                done += 1;
             }
-            done += 1;
-        }
+            Ok(())
+        })?;
         let mut summary = self.summary(done, start.elapsed());
         summary.width = crop.width();
         summary.height = crop.height();
@@ -584,7 +595,7 @@ struct Control<'a> {
     interrupt: Option<Arc<AtomicBool>>,
     budget: Option<Duration>,
     start: Instant,
-    progress: &'a mut dyn FnMut(u64),
+    progress: &'a mut (dyn FnMut(u64) + Send),
 }
 
 impl PassControl for Control<'_> {

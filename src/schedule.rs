@@ -152,8 +152,9 @@ pub fn bounce_schedule() -> Schedule {
     s
 }
 
-/// What the pass and region loops ask of the driver that runs them.
-pub trait PassControl {
+/// What the pass and region loops ask of the driver that runs them. `Send` because the
+/// loops run on a rayon worker, so its methods may be called from another thread.
+pub trait PassControl: Send {
     /// Asked before every region: `false` stops the loops (an interrupt). The region in
     /// flight always finishes, so the film stays consistent.
     fn proceed(&mut self) -> bool {
@@ -178,17 +179,22 @@ pub fn run_passes(
     pixels: Range<u32>,
     control: &mut dyn PassControl,
 ) -> Result<u32> {
-    let mut done = 0;
-    for sample in samples {
-        if !run_pass(world, sample, pixels.clone(), control)? {
-            break;
+    // The whole loop on one rayon worker: each region's parallel stages then start from
+    // that worker, and the calling thread hands over once per render instead of once
+    // per region (256 times for 16 passes of 16 regions), sleeping until it ends.
+    rayon::scope(|_| {
+        let mut done = 0;
+        for sample in samples {
+            if !run_pass(world, sample, pixels.clone(), control)? {
+                break;
+            }
+            done += 1;
+            if !control.another_pass() {
+                break;
+            }
         }
-        done += 1;
-        if !control.another_pass() {
-            break;
-        }
-    }
-    Ok(done)
+        Ok(done)
+    })
 }
 
 /// The region loop: one sample index over `pixels`, [`REGION_PIXELS`] at a time;
@@ -210,7 +216,8 @@ pub fn run_pass(
         });
         // On a rayon worker: the region's parallel stages then start from that worker
         // (which takes its share) instead of each waking the pool from this thread and
-        // sleeping until it ends.
+        // sleeping until it ends. Already on a worker (from `run_passes`), this runs in
+        // place.
         rayon::scope(|_| world.run_schedule(RenderPass));
         control.region_done(count as u64);
         first += count;

@@ -176,3 +176,33 @@ fn restart_with_a_new_view_and_settings_renders_as_a_fresh_renderer() {
     assert_eq!((r.film().width, r.film().height), (12, 10));
     assert_eq!(r.film(), fresh.film());
 }
+
+#[test]
+fn render_loops_run_on_a_rayon_worker() {
+    // The pass loops run inside one rayon scope (one hand-off per render, not one per
+    // region), so the progress callback is called from a pool worker.
+    let on_worker = |progress_calls: &mut u32| {
+        *progress_calls += 1;
+        assert!(
+            rayon::current_thread_index().is_some(),
+            "progress reported from outside the pool"
+        );
+    };
+    let mut calls = 0;
+    let mut r = load(&scene(8, "pixel_samples: 2, pixel_sampling: uniform"));
+    r.render(None, &mut |_| on_worker(&mut calls)).unwrap();
+    let rule = glint::render::StopRule {
+        time: Some(Duration::ZERO),
+        target_rmse: Some(1e-12),
+        target_rel_error: None,
+    };
+    let mut r = load(&scene(8, "pixel_samples: 2, pixel_sampling: uniform"));
+    r.render_until(&rule, &mut |_| on_worker(&mut calls))
+        .unwrap();
+    let mut r = load(&scene(8, "pixel_samples: 2, pixel_sampling: uniform"));
+    let full = glint::film::part::Crop::full(8, 8);
+    r.render_part(0..2, full, &mut |_| on_worker(&mut calls))
+        .unwrap();
+    // Two passes, one pass (the time is spent), two passes: one region each.
+    assert_eq!(calls, 5);
+}

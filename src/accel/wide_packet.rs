@@ -559,8 +559,17 @@ impl WideBvh {
     #[inline(always)]
     pub(super) fn closest_lanes_inlined(&self, rays: &RayLanes, t_max: &Lanes) -> HitLanes {
         let mut best = HitLanes::default();
+        self.closest_lanes_into(rays, t_max, &mut best);
+        best
+    }
+
+    /// [`Self::closest_lanes_inlined`] into `best` (cleared first): the hits land where
+    /// the caller keeps them, with no copy of the lanes after the query.
+    #[inline(always)]
+    pub(super) fn closest_lanes_into(&self, rays: &RayLanes, t_max: &Lanes, best: &mut HitLanes) {
+        *best = HitLanes::default();
         if self.nodes.is_empty() || rays.active == 0 {
-            return best;
+            return;
         }
         let mut p = PacketRays::from_lanes(rays, t_max);
         let limit = p.cull;
@@ -568,10 +577,9 @@ impl WideBvh {
         while todo != 0 {
             let first = todo.trailing_zeros() as usize;
             let (shear, class) = (p.shear(first), p.same_axes(first) & todo);
-            self.closest_sub_packet(&mut p, &shear, class, &limit, &mut best);
+            self.closest_sub_packet(&mut p, &shear, class, &limit, best);
             todo &= !class;
         }
-        best
     }
 
     /// The closest hits of `rays` (all of sub-packet `s`) into `best`: the closest-hit

@@ -211,6 +211,15 @@ fn check_closest(wide: &WideBvh, rays: &[(Ray, f32)]) -> usize {
         // And the public query in lanes, with one bound for every ray.
         let within = wide.closest_packet_within(&r, t[0]);
         assert_eq!(within.found >> chunk.len(), 0, "hits past the packet");
+        // Written in place over a previous packet's hits, it is the same.
+        let mut reused = HitLanes {
+            t: [0.5; PACKET],
+            prim: [7; PACKET],
+            found: u32::MAX,
+            ..HitLanes::default()
+        };
+        wide.closest_packet_within_into(&r, t[0], &mut reused);
+        assert_eq!(reused, within, "hits written over old ones");
         for (i, (ray, t_max)) in chunk.iter().enumerate() {
             let want = wide.closest_hit_at(ray, *t_max);
             assert_eq!(bits(&got[i]), bits(&want), "{ray:?} t_max {t_max}");

@@ -315,8 +315,16 @@ impl WideBvh {
     /// holds `closest_hit_at(&rays[i], t_max)`. The rays are put in lanes and the bound
     /// spread to them inside the dispatched clone.
     pub fn closest_packet_within(&self, rays: &[Ray], t_max: f32) -> HitLanes {
+        let mut hits = HitLanes::default();
+        self.closest_packet_within_into(rays, t_max, &mut hits);
+        hits
+    }
+
+    /// [`Self::closest_packet_within`] into `hits` (whatever it held before): the query
+    /// writes the caller's lanes in place, where a returned value cost a copy of them.
+    pub fn closest_packet_within_into(&self, rays: &[Ray], t_max: f32, hits: &mut HitLanes) {
         assert!(rays.len() <= PACKET, "a packet of {} rays", rays.len());
-        closest_packet_within_dispatched(self, rays, t_max)
+        closest_packet_within_dispatched(self, rays, t_max, hits);
     }
 }
 
@@ -423,8 +431,8 @@ fn closest_packet_dispatched(wide: &WideBvh, rays: &[Ray], t_max: &[f32]) -> Hit
 /// [`WideBvh::closest_packet_within`] for the best instruction set the CPU has (the
 /// bound spread to the lanes in here, as in `occluded_lanes_dispatched`).
 #[multiversion(targets("x86_64+avx2+fma", "x86_64+sse4.2"))]
-fn closest_packet_within_dispatched(wide: &WideBvh, rays: &[Ray], t_max: f32) -> HitLanes {
-    wide.closest_lanes_inlined(&RayLanes::from_rays(rays), &[t_max; PACKET])
+fn closest_packet_within_dispatched(wide: &WideBvh, rays: &[Ray], t_max: f32, hits: &mut HitLanes) {
+    wide.closest_lanes_into(&RayLanes::from_rays(rays), &[t_max; PACKET], hits);
 }
 
 #[cfg(test)]

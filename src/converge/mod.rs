@@ -238,7 +238,7 @@ fn run_configuration(
     scene_text: &str,
     settings: &[(String, String)],
     reference: &Reference,
-    log: &mut dyn FnMut(&str),
+    log: &mut (dyn FnMut(&str) + Send),
 ) -> Result<(Curve, Vec<String>)> {
     let file = configured_scene(options, scene_text, settings)?;
     let mut renderer = Renderer::from_scene(&file, &options.scene)?;
@@ -320,7 +320,10 @@ fn run_configuration(
 }
 
 /// Runs every configuration, writes the CSV and plot if asked, and reports.
-pub fn run(options: &ConvergeOptions, log: &mut dyn FnMut(&str)) -> Result<ConvergeReport> {
+pub fn run(
+    options: &ConvergeOptions,
+    log: &mut (dyn FnMut(&str) + Send),
+) -> Result<ConvergeReport> {
     if options.time.is_none() && options.max_spp.is_none() {
         return Err(GlintError::Options(
             "converge needs a budget: a time or a number of samples per pixel".into(),

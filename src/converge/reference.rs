@@ -119,7 +119,7 @@ pub fn cached_reference(
     overrides: &Overrides,
     spp: u32,
     interrupt: Option<Arc<AtomicBool>>,
-    log: &mut dyn FnMut(&str),
+    log: &mut (dyn FnMut(&str) + Send),
 ) -> Result<(Reference, ReferenceOrigin)> {
     let bytes = std::fs::read(scene).map_err(|source| GlintError::Io {
         path: scene.to_owned(),

@@ -102,7 +102,8 @@ impl SceneGeometry {
             }
             return;
         }
-        hits.flat = self.tri_wide.closest_packet_within(rays, t_max);
+        self.tri_wide
+            .closest_packet_within_into(rays, t_max, &mut hits.flat);
         if !self.instanced.is_empty() || !self.sphere_bvh.nodes.is_empty() {
             for (r, ray) in rays.iter().enumerate() {
                 let flat = hits.flat.found & (1 << r) != 0;
