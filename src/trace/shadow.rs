@@ -275,6 +275,29 @@ impl ShadowQueue {
         keep_arrived: bool,
         visible: impl Fn(&ShadowPacket, &mut [Vec3; PACKET]) + Sync,
     ) {
+        self.for_each_chunk(radiance, |radiance, first, rays, arrived| {
+            for packet in rays.packets() {
+                let mut lanes = [Vec3::ZERO; PACKET];
+                visible(packet, &mut lanes);
+                // Added packet by packet, lane by lane, in queue order: the same sums.
+                for r in packet.rays.lanes() {
+                    radiance[(packet.owner[r] - first) as usize] += lanes[r];
+                }
+                if keep_arrived {
+                    arrived.push(lanes);
+                }
+            }
+        });
+    }
+
+    /// Runs `chunk(radiance, first, rays, arrived)` on each live chunk in parallel: the
+    /// chunk's part of `radiance` (whose first sample is `first`), its shadow rays, and
+    /// its list of what arrived, empty.
+    fn for_each_chunk(
+        &mut self,
+        radiance: &mut [Vec3],
+        chunk: impl Fn(&mut [Vec3], u32, &ShadowPackets, &mut Vec<[Vec3; PACKET]>) + Sync,
+    ) {
         let live = self.live;
         debug_assert!(
             live <= radiance.len().div_ceil(CHUNK),
@@ -293,18 +316,7 @@ impl ShadowQueue {
                 // (the fill was ~9 instructions per shadow ray); no entry of an earlier
                 // depth can survive, as the chunk's vector is cleared and only extended.
                 arrived.clear();
-                let first = c * CHUNK;
-                for packet in rays.packets() {
-                    let mut lanes = [Vec3::ZERO; PACKET];
-                    visible(packet, &mut lanes);
-                    // Added packet by packet, lane by lane, in queue order: the same sums.
-                    for r in packet.rays.lanes() {
-                        radiance[packet.owner[r] as usize - first] += lanes[r];
-                    }
-                    if keep_arrived {
-                        arrived.push(lanes);
-                    }
-                }
+                chunk(radiance, (c * CHUNK) as u32, rays, arrived);
             });
     }
 }
@@ -321,34 +333,19 @@ impl ShadowQueue {
         keep_arrived: bool,
         blocked: impl Fn(&ShadowPacket) -> u32 + Sync,
     ) {
-        let live = self.live;
-        debug_assert!(
-            live <= radiance.len().div_ceil(CHUNK),
-            "rays without owners"
-        );
-        if self.arrived.len() < live {
-            self.arrived.resize_with(live, Vec::new);
-        }
-        radiance
-            .par_chunks_mut(CHUNK)
-            .zip(self.rays[..live].par_iter())
-            .zip(self.arrived[..live].par_iter_mut())
-            .enumerate()
-            .for_each(|(c, ((radiance, rays), arrived))| {
-                arrived.clear();
-                let first = (c * CHUNK) as u32;
-                for packet in rays.packets() {
-                    let lanes = arrived_lanes(packet, blocked(packet));
-                    add_lanes(radiance, first, packet, &lanes);
-                    if keep_arrived {
-                        arrived.push(std::array::from_fn(|r| {
-                            let on = packet.rays.active & (1 << r) != 0;
-                            let v = Vec3::new(lanes[0][r], lanes[1][r], lanes[2][r]);
-                            if on { v } else { Vec3::ZERO }
-                        }));
-                    }
+        self.for_each_chunk(radiance, |radiance, first, rays, arrived| {
+            for packet in rays.packets() {
+                let lanes = arrived_lanes(packet, blocked(packet));
+                add_lanes(radiance, first, packet, &lanes);
+                if keep_arrived {
+                    arrived.push(std::array::from_fn(|r| {
+                        let on = packet.rays.active & (1 << r) != 0;
+                        let v = Vec3::new(lanes[0][r], lanes[1][r], lanes[2][r]);
+                        if on { v } else { Vec3::ZERO }
+                    }));
                 }
-            });
+            }
+        });
     }
 }
 
@@ -393,7 +390,7 @@ fn add_lanes(radiance: &mut [Vec3], first: u32, packet: &ShadowPacket, lanes: &[
 mod tests {
     use super::*;
 
-    fn shadow(owner: u32) -> ShadowRay {
+    pub(super) fn shadow(owner: u32) -> ShadowRay {
         ShadowRay {
             ray: Ray {
                 origin: Vec3::ZERO,
@@ -583,7 +580,7 @@ mod blocked_tests {
         whole(&mut buffers[0], 0, 0xff);
         whole(&mut buffers[0], 8, 0b1011_0110);
         for owner in [16, 16, 17] {
-            let mut s = tests_shadow(owner);
+            let mut s = super::tests::shadow(owner);
             s.contribution.y = -0.0;
             buffers[0].push(s);
         }
@@ -629,16 +626,5 @@ mod blocked_tests {
         queue.trace_blocked(&mut again, false, blocked);
         assert_eq!(bits(&again), bits(&want));
         assert!(queue.arrived().is_empty());
-    }
-
-    fn tests_shadow(owner: u32) -> ShadowRay {
-        ShadowRay {
-            ray: Ray {
-                origin: Vec3::ZERO,
-                dir: Vec3::X,
-            },
-            contribution: Vec3::splat(owner as f32 + 1.0),
-            owner,
-        }
     }
 }
