@@ -31,6 +31,14 @@ use bins::{Bins, best_sah_plane, partition, partition_bounded};
 
 /// Number of SAH bins per axis.
 const BINS: usize = 16;
+/// Bins per axis of nodes below [`FEW_BINS_BELOW`] primitives: they are most nodes,
+/// and for them resetting and sweeping 16 bins cost more than binning their
+/// primitives. On the 100k torus 8 bins below 64 primitives take 8% fewer build
+/// instructions, and the SAH cost goes from 17.306 to 17.289 (1M: 20.386 to 20.360;
+/// below 128: 17.300, 20.376).
+const FEW_BINS: usize = 8;
+/// See [`FEW_BINS`].
+const FEW_BINS_BELOW: usize = 64;
 /// At or below this many primitives a node is always a leaf.
 const MIN_LEAF: usize = 4;
 /// Above this many primitives a node is always split (if centroids differ).
@@ -367,6 +375,20 @@ fn build_node(
     );
 }
 
+/// Bins per axis for a node of `n` primitives: [`BINS`], or [`FEW_BINS`] below
+/// [`FEW_BINS_BELOW`] primitives, but one per primitive for the nodes of `FEW_BINS + 1
+/// ..= BINS`, so that evenly spread primitives can still split into whole leaf blocks.
+#[inline(always)]
+fn bin_count(n: usize) -> usize {
+    if n >= FEW_BINS_BELOW {
+        BINS
+    } else if (FEW_BINS + 1..=BINS).contains(&n) {
+        n
+    } else {
+        FEW_BINS
+    }
+}
+
 /// Whether a node of `n` primitives chooses its plane from the bins of a sample (every
 /// [`SAMPLE_STRIDE`]-th primitive): binning is about half of the build, and from
 /// [`SAMPLE_MIN`] primitives on half of them place the plane about as well. The
@@ -408,7 +430,8 @@ fn split(
     let area = b.node.surface_area();
     let sampled = sampled(n);
     let sah = if area > 0.0 {
-        bins.fill(refs, b.centroids, sampled);
+        let count = bin_count(n);
+        bins.fill(refs, b.centroids, sampled, count);
         best_sah_plane(bins)
     } else {
         // Flat, zero-area node (e.g. collinear points): SAH is undefined.

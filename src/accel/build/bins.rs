@@ -10,8 +10,8 @@ use wide::bytemuck::cast;
 use wide::{f32x4, i32x4, u32x4};
 
 use super::{
-    BINS, Box4, LEAF_BLOCK, Lanes, NodeBounds, PARALLEL_BIN_CHUNK, PrimRef, SAMPLE_STRIDE,
-    TWO_SETS_MIN,
+    BINS, Box4, FEW_BINS, LEAF_BLOCK, Lanes, NodeBounds, PARALLEL_BIN_CHUNK, PrimRef,
+    SAMPLE_STRIDE, TWO_SETS_MIN,
 };
 
 /// A box as its lower corner and its negated upper corner, the bins' form: growing
@@ -157,6 +157,8 @@ const ROWS: usize = 4;
 pub(super) struct Bins {
     min: Lanes,
     scale: Lanes,
+    /// The last bin's index, as a float (the clamp of [`bins_of`]).
+    last: f32,
     counts: [[u32; BINS]; ROWS],
     boxes: [[BinBox; BINS]; ROWS],
 }
@@ -166,25 +168,27 @@ impl Bins {
         let mut bins = Bins {
             min: [0.0; 4],
             scale: [0.0; 4],
+            last: 0.0,
             counts: [[0; BINS]; ROWS],
             boxes: [[BinBox::EMPTY; BINS]; ROWS],
         };
-        bins.reset(centroids);
+        bins.reset(centroids, BINS);
         bins
     }
 
-    /// Bins `refs` into `self` (scratch reused across nodes: no copies of
-    /// its 2.3 KB), in parallel chunks when there are many, else only every
-    /// [`SAMPLE_STRIDE`]-th primitive when `sampled` (see [`super::sampled`]).
+    /// Bins `refs` into `count` bins per axis ([`BINS`] or [`FEW_BINS`]) of `self`
+    /// (scratch reused across nodes: no copies of its 2.3 KB), in parallel chunks of
+    /// [`BINS`] when there are many, else only every [`SAMPLE_STRIDE`]-th primitive
+    /// when `sampled` (see [`super::sampled`]).
     #[inline(always)]
-    pub(super) fn fill(&mut self, refs: &[PrimRef], centroids: Box4, sampled: bool) {
+    pub(super) fn fill(&mut self, refs: &[PrimRef], centroids: Box4, sampled: bool, count: usize) {
         if refs.len() >= 2 * PARALLEL_BIN_CHUNK {
             *self = refs
                 .par_chunks(PARALLEL_BIN_CHUNK)
                 .map(|c| bin_chunk(c, centroids))
                 .reduce(|| Bins::empty(centroids), Bins::merge);
         } else {
-            self.reset(centroids);
+            self.reset(centroids, count);
             if sampled {
                 self.add_every::<SAMPLE_STRIDE>(refs);
             } else {
@@ -194,17 +198,22 @@ impl Bins {
     }
 
     #[inline(always)]
-    fn reset(&mut self, centroids: Box4) {
+    fn reset(&mut self, centroids: Box4, count: usize) {
         let (min, max) = (centroids.min, centroids.max);
         self.min = min;
         self.scale = std::array::from_fn(|i| {
             let ext = max[i] - min[i];
-            if ext > 0.0 { BINS as f32 / ext } else { 0.0 }
+            if ext > 0.0 { count as f32 / ext } else { 0.0 }
         });
+        self.last = (count - 1) as f32;
         self.counts = [[0; BINS]; ROWS];
-        // The fourth row's boxes are never grown.
+        // The fourth row's boxes are never grown; bins from `count` on are never read.
         for row in &mut self.boxes[..3] {
-            *row = [BinBox::EMPTY; BINS];
+            if count == FEW_BINS {
+                row[..FEW_BINS].fill(BinBox::EMPTY);
+            } else {
+                *row = [BinBox::EMPTY; BINS];
+            }
         }
     }
 
@@ -230,7 +239,7 @@ impl Bins {
             return;
         }
         let mut second = Bins::empty(Box4::EMPTY);
-        (second.min, second.scale) = (self.min, self.scale);
+        (second.min, second.scale, second.last) = (self.min, self.scale, self.last);
         let (front, back) = refs.split_at(refs.len() / 2);
         for (a, b) in front.chunks_exact(S).zip(back.chunks_exact(S)) {
             self.add_one(&a[0]);
@@ -252,7 +261,12 @@ impl Bins {
         let counts = self.counts.as_flattened_mut();
         let boxes = self.boxes.as_flattened_mut();
         let flipped = r.flipped();
-        let k = bins_of(r.centroid_x4(), self.min.into(), self.scale.into());
+        let k = bins_of(
+            r.centroid_x4(),
+            self.min.into(),
+            self.scale.into(),
+            self.last,
+        );
         let rows = i32x4::from([0, BINS as i32, 2 * BINS as i32, 0]);
         let at = (k | rows).to_array();
         for &at in &at[..3] {
@@ -339,10 +353,10 @@ fn bin_position(c: f32, min: f32, scale: f32) -> f32 {
 /// for NaN and overflow). Written lane by lane, the bins needed a fourth lane's count
 /// (a store per primitive, of the binning's seven) to stay in SIMD lanes.
 #[inline(always)]
-fn bins_of(c: f32x4, min: f32x4, scale: f32x4) -> i32x4 {
+fn bins_of(c: f32x4, min: f32x4, scale: f32x4, last: f32) -> i32x4 {
     ((c - min) * scale)
         .fast_max(f32x4::ZERO)
-        .fast_min(f32x4::splat((BINS - 1) as f32))
+        .fast_min(f32x4::splat(last))
         .fast_trunc_int()
 }
 

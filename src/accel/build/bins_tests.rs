@@ -3,7 +3,7 @@
 use glam::Vec3;
 use wide::f32x4;
 
-use super::super::{NodeBounds, SAMPLE_STRIDE, blocks};
+use super::super::{FEW_BINS, NodeBounds, SAMPLE_STRIDE, blocks};
 use super::*;
 use crate::accel::Aabb;
 use crate::test_util::Lcg;
@@ -339,7 +339,7 @@ fn bins_of_truncates_exactly_like_as() {
     for x in samples() {
         let position = bin_position(x, 0.0, 1.0);
         let expected = position as u32;
-        let k = bins_of(f32x4::splat(x), f32x4::ZERO, f32x4::ONE).to_array();
+        let k = bins_of(f32x4::splat(x), f32x4::ZERO, f32x4::ONE, (BINS - 1) as f32).to_array();
         assert_eq!(k, [expected as i32; 4], "{x}");
         let lanes = bin_positions(f32x4::splat(x), f32x4::ZERO, f32x4::ONE).to_array();
         assert_eq!(lanes.map(f32::to_bits), [position.to_bits(); 4], "{x}");
@@ -375,7 +375,7 @@ fn sampled_bins_hold_every_second_primitive_of_each_half() {
         let refs = random_refs(&mut rng, n);
         let centroids = NodeBounds::of(&refs).centroids;
         let mut got = Bins::empty(centroids);
-        got.fill(&refs, centroids, true);
+        got.fill(&refs, centroids, true, BINS);
         // The reference: the sample one by one, the first half's before the second's
         // (the order in which ties resolve, see `Bins::add`).
         let mut want = Bins::empty(centroids);
@@ -414,7 +414,7 @@ fn bounded_partition_bounds_each_side_exactly() {
         let refs = random_refs(&mut rng, n);
         let centroids = NodeBounds::of(&refs).centroids;
         let mut bins = Bins::empty(centroids);
-        bins.fill(&refs, centroids, true);
+        bins.fill(&refs, centroids, true, BINS);
         let Some(plane) = best_sah_plane(&bins) else {
             continue;
         };
@@ -435,5 +435,49 @@ fn bounded_partition_bounds_each_side_exactly() {
         let (exact_l, exact_r) = (NodeBounds::of(&got[..gm]), NodeBounds::of(&got[gm..]));
         assert_eq!(bits(gl.node), bits(exact_l.node), "round {round}");
         assert_eq!(bits(gr.node), bits(exact_r.node), "round {round}");
+    }
+}
+
+#[test]
+fn few_bins_in_reused_scratch_match_fresh_bins() {
+    // Nodes alternately of 16 and 8 bins in one scratch: the bins from 8 on keep the
+    // previous node's boxes, which nothing may read.
+    let mut rng = Lcg(0x1f83_d9ab_fb41_bd6b);
+    let mut scratch = Bins::empty(Box4::EMPTY);
+    for round in 0..400 {
+        let n = 2 + rng.below(300) as usize;
+        let refs = random_refs(&mut rng, n);
+        let centroids = NodeBounds::of(&refs).centroids;
+        let count = if round % 2 == 0 { BINS } else { FEW_BINS };
+        scratch.fill(&refs, centroids, false, count);
+        let mut fresh = Bins::empty(centroids);
+        fresh.reset(centroids, count);
+        for r in &refs {
+            fresh.add_one(r);
+        }
+        for axis in 0..3 {
+            let c = scratch.counts[axis];
+            assert_eq!(c, fresh.counts[axis], "round {round}");
+            assert!(c[count..].iter().all(|&k| k == 0), "round {round}");
+            if scratch.scale[axis] > 0.0 {
+                assert!(
+                    c[count - 1] > 0,
+                    "round {round}: the last bin holds the max"
+                );
+            }
+        }
+        let (got, want) = (best_sah_plane(&scratch), best_sah_plane(&fresh));
+        assert_eq!(got.is_some(), want.is_some(), "round {round}");
+        let (Some(got), Some(want)) = (got, want) else {
+            continue;
+        };
+        assert!(got.bin < count, "round {round}");
+        let key = |p: &Plane| (p.axis, p.bin, p.occupied, p.cost.to_bits());
+        assert_eq!(key(&got), key(&want), "round {round}");
+        let bits = |(l, r): (Box4, Box4)| [l, r].map(|b| BinBox::of(b).0.map(f32::to_bits));
+        assert_eq!(
+            bits(scratch.boxes_around(&got)),
+            bits(fresh.boxes_around(&want))
+        );
     }
 }
