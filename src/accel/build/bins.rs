@@ -9,7 +9,10 @@ use rayon::prelude::*;
 use wide::bytemuck::cast;
 use wide::{f32x4, i32x4, u32x4};
 
-use super::{BINS, Box4, LEAF_BLOCK, Lanes, PARALLEL_BIN_CHUNK, PrimRef, TWO_SETS_MIN};
+use super::{
+    BINS, Box4, FEW_BINS, LEAF_BLOCK, Lanes, NodeBounds, PARALLEL_BIN_CHUNK, PrimRef,
+    SAMPLE_STRIDE, TWO_SETS_MIN,
+};
 
 /// A box as its lower corner and its negated upper corner, the bins' form: growing
 /// it is one lane-wise min over all eight lanes. `-a < -b` exactly when `a > b`, so
@@ -154,6 +157,8 @@ const ROWS: usize = 4;
 pub(super) struct Bins {
     min: Lanes,
     scale: Lanes,
+    /// The last bin's index, as a float (the clamp of [`bins_of`]).
+    last: f32,
     counts: [[u32; BINS]; ROWS],
     boxes: [[BinBox; BINS]; ROWS],
 }
@@ -163,40 +168,52 @@ impl Bins {
         let mut bins = Bins {
             min: [0.0; 4],
             scale: [0.0; 4],
+            last: 0.0,
             counts: [[0; BINS]; ROWS],
             boxes: [[BinBox::EMPTY; BINS]; ROWS],
         };
-        bins.reset(centroids);
+        bins.reset(centroids, BINS);
         bins
     }
 
-    /// Bins `refs` into `self` (scratch reused across nodes: no copies of
-    /// its 2.3 KB), in parallel chunks when there are many.
+    /// Bins `refs` into `count` bins per axis ([`BINS`] or [`FEW_BINS`]) of `self`
+    /// (scratch reused across nodes: no copies of its 2.3 KB), in parallel chunks of
+    /// [`BINS`] when there are many, else only every [`SAMPLE_STRIDE`]-th primitive
+    /// when `sampled` (see [`super::sampled`]).
     #[inline(always)]
-    pub(super) fn fill(&mut self, refs: &[PrimRef], centroids: Box4) {
+    pub(super) fn fill(&mut self, refs: &[PrimRef], centroids: Box4, sampled: bool, count: usize) {
         if refs.len() >= 2 * PARALLEL_BIN_CHUNK {
             *self = refs
                 .par_chunks(PARALLEL_BIN_CHUNK)
                 .map(|c| bin_chunk(c, centroids))
                 .reduce(|| Bins::empty(centroids), Bins::merge);
         } else {
-            self.reset(centroids);
-            self.add(refs);
+            self.reset(centroids, count);
+            if sampled {
+                self.add_every::<SAMPLE_STRIDE>(refs);
+            } else {
+                self.add(refs);
+            }
         }
     }
 
     #[inline(always)]
-    fn reset(&mut self, centroids: Box4) {
+    fn reset(&mut self, centroids: Box4, count: usize) {
         let (min, max) = (centroids.min, centroids.max);
         self.min = min;
         self.scale = std::array::from_fn(|i| {
             let ext = max[i] - min[i];
-            if ext > 0.0 { BINS as f32 / ext } else { 0.0 }
+            if ext > 0.0 { count as f32 / ext } else { 0.0 }
         });
+        self.last = (count - 1) as f32;
         self.counts = [[0; BINS]; ROWS];
-        // The fourth row's boxes are never grown.
+        // The fourth row's boxes are never grown; bins from `count` on are never read.
         for row in &mut self.boxes[..3] {
-            *row = [BinBox::EMPTY; BINS];
+            if count == FEW_BINS {
+                row[..FEW_BINS].fill(BinBox::EMPTY);
+            } else {
+                *row = [BinBox::EMPTY; BINS];
+            }
         }
     }
 
@@ -208,22 +225,31 @@ impl Bins {
     /// (+0 and -0) resolve as one pass would resolve them, bit for bit.
     #[inline(always)]
     fn add(&mut self, refs: &[PrimRef]) {
+        self.add_every::<1>(refs);
+    }
+
+    /// [`Bins::add`] of every `S`-th primitive of each half (the first of each run of
+    /// `S`; a last, shorter run is left out when `S > 1`).
+    #[inline(always)]
+    fn add_every<const S: usize>(&mut self, refs: &[PrimRef]) {
         if refs.len() < TWO_SETS_MIN {
-            for r in refs {
-                self.add_one(r);
+            for r in refs.chunks_exact(S) {
+                self.add_one(&r[0]);
             }
             return;
         }
         let mut second = Bins::empty(Box4::EMPTY);
-        (second.min, second.scale) = (self.min, self.scale);
+        (second.min, second.scale, second.last) = (self.min, self.scale, self.last);
         let (front, back) = refs.split_at(refs.len() / 2);
-        for (a, b) in front.iter().zip(back) {
-            self.add_one(a);
-            second.add_one(b);
+        for (a, b) in front.chunks_exact(S).zip(back.chunks_exact(S)) {
+            self.add_one(&a[0]);
+            second.add_one(&b[0]);
         }
         // `back` has one more when the count is odd.
-        for r in &back[front.len()..] {
-            second.add_one(r);
+        if S == 1 {
+            for r in &back[front.len()..] {
+                second.add_one(r);
+            }
         }
         self.merge_in(&second);
     }
@@ -235,7 +261,12 @@ impl Bins {
         let counts = self.counts.as_flattened_mut();
         let boxes = self.boxes.as_flattened_mut();
         let flipped = r.flipped();
-        let k = bins_of(r.centroid_x4(), self.min.into(), self.scale.into());
+        let k = bins_of(
+            r.centroid_x4(),
+            self.min.into(),
+            self.scale.into(),
+            self.last,
+        );
         let rows = i32x4::from([0, BINS as i32, 2 * BINS as i32, 0]);
         let at = (k | rows).to_array();
         for &at in &at[..3] {
@@ -322,10 +353,10 @@ fn bin_position(c: f32, min: f32, scale: f32) -> f32 {
 /// for NaN and overflow). Written lane by lane, the bins needed a fourth lane's count
 /// (a store per primitive, of the binning's seven) to stay in SIMD lanes.
 #[inline(always)]
-fn bins_of(c: f32x4, min: f32x4, scale: f32x4) -> i32x4 {
+fn bins_of(c: f32x4, min: f32x4, scale: f32x4, last: f32) -> i32x4 {
     ((c - min) * scale)
         .fast_max(f32x4::ZERO)
-        .fast_min(f32x4::splat((BINS - 1) as f32))
+        .fast_min(f32x4::splat(last))
         .fast_trunc_int()
 }
 
@@ -465,21 +496,54 @@ fn first_right(min: f32, scale: f32, bin: usize) -> f32 {
 /// it decides the primitive order in the leaves.
 #[inline(always)]
 pub(super) fn partition(refs: &mut [PrimRef], bins: &Bins, plane: &Plane) -> (usize, Box4, Box4) {
+    let (mid, [left, right], _) = partition_by::<false>(refs, bins, plane);
+    (mid, left, right)
+}
+
+/// [`partition`] that also bounds both sides' primitives: for nodes whose bins saw
+/// only a sample of them ([`Bins::fill`]), so that [`Bins::boxes_around`] would not.
+#[inline(always)]
+pub(super) fn partition_bounded(
+    refs: &mut [PrimRef],
+    bins: &Bins,
+    plane: &Plane,
+) -> (usize, NodeBounds, NodeBounds) {
+    let (mid, [lc, rc], [ln, rn]) = partition_by::<true>(refs, bins, plane);
+    let side = |node: BinBox, centroids| NodeBounds {
+        node: node.box4(),
+        centroids,
+    };
+    (mid, side(ln, lc), side(rn, rc))
+}
+
+/// [`partition`], with both sides' boxes when `NODES`.
+#[inline(always)]
+fn partition_by<const NODES: bool>(
+    refs: &mut [PrimRef],
+    bins: &Bins,
+    plane: &Plane,
+) -> (usize, [Box4; 2], [BinBox; 2]) {
     let axis = plane.axis % 3;
     let first = first_right(bins.min[axis], bins.scale[axis], plane.bin);
     // One loop per axis: a lane picked at run time went through memory.
     match axis {
-        0 => partition_on::<0>(refs, first),
-        1 => partition_on::<1>(refs, first),
-        _ => partition_on::<2>(refs, first),
+        0 => partition_on::<0, NODES>(refs, first),
+        1 => partition_on::<1, NODES>(refs, first),
+        _ => partition_on::<2, NODES>(refs, first),
     }
 }
 
-/// [`partition`] on axis `AXIS`: centroids below `first_right` go left.
+/// [`partition`] on axis `AXIS`: centroids below `first_right` go left. The sides'
+/// boxes grow as bins do ([`BinBox::grow`]) when `NODES`.
 #[inline(always)]
-fn partition_on<const AXIS: usize>(refs: &mut [PrimRef], first_right: f32) -> (usize, Box4, Box4) {
+fn partition_on<const AXIS: usize, const NODES: bool>(
+    refs: &mut [PrimRef],
+    first_right: f32,
+) -> (usize, [Box4; 2], [BinBox; 2]) {
     let mut left = Box4::EMPTY;
     let mut right = Box4::EMPTY;
+    let mut left_node = BinBox::EMPTY;
+    let mut right_node = BinBox::EMPTY;
     let mut i = 0;
     let mut j = refs.len();
     while i < j {
@@ -488,16 +552,22 @@ fn partition_on<const AXIS: usize>(refs: &mut [PrimRef], first_right: f32) -> (u
         // NaN goes left (the comparison is false).
         if c[AXIS] >= first_right {
             right.grow(c, c);
+            if NODES {
+                right_node.grow(r.flipped());
+            }
             j -= 1;
             // refs.swap(i, j), without its round trip through the stack.
             refs[i] = refs[j];
             refs[j] = r;
         } else {
             left.grow(c, c);
+            if NODES {
+                left_node.grow(r.flipped());
+            }
             i += 1;
         }
     }
-    (i, left, right)
+    (i, [left, right], [left_node, right_node])
 }
 
 #[cfg(test)]

@@ -3,7 +3,7 @@
 use glam::Vec3;
 use wide::f32x4;
 
-use super::super::{NodeBounds, blocks};
+use super::super::{FEW_BINS, NodeBounds, SAMPLE_STRIDE, blocks};
 use super::*;
 use crate::accel::Aabb;
 use crate::test_util::Lcg;
@@ -339,7 +339,7 @@ fn bins_of_truncates_exactly_like_as() {
     for x in samples() {
         let position = bin_position(x, 0.0, 1.0);
         let expected = position as u32;
-        let k = bins_of(f32x4::splat(x), f32x4::ZERO, f32x4::ONE).to_array();
+        let k = bins_of(f32x4::splat(x), f32x4::ZERO, f32x4::ONE, (BINS - 1) as f32).to_array();
         assert_eq!(k, [expected as i32; 4], "{x}");
         let lanes = bin_positions(f32x4::splat(x), f32x4::ZERO, f32x4::ONE).to_array();
         assert_eq!(lanes.map(f32::to_bits), [position.to_bits(); 4], "{x}");
@@ -350,5 +350,134 @@ fn bins_of_truncates_exactly_like_as() {
                 "{x} {bin}"
             );
         }
+    }
+}
+
+/// Nodes of random boxes (a few NaN centroid coordinates among them).
+fn random_refs(rng: &mut Lcg, n: usize) -> Vec<PrimRef> {
+    (0..n)
+        .map(|i| {
+            let mut lo = Vec3::new(rng.next_f32(), rng.next_f32(), rng.next_f32());
+            let mut hi = lo + Vec3::new(rng.next_f32(), rng.next_f32(), rng.next_f32()) * 0.1;
+            if rng.below(50) == 0 {
+                let axis = rng.below(3) as usize;
+                (lo[axis], hi[axis]) = (f32::NAN, f32::NAN);
+            }
+            PrimRef::new(i, &Aabb::new(lo, hi))
+        })
+        .collect()
+}
+
+#[test]
+fn sampled_bins_hold_every_second_primitive_of_each_half() {
+    let mut rng = Lcg(0x510e_527f_ade6_82d1);
+    for n in [5, TWO_SETS_MIN - 1, TWO_SETS_MIN, 1001, 1030, 4096] {
+        let refs = random_refs(&mut rng, n);
+        let centroids = NodeBounds::of(&refs).centroids;
+        let mut got = Bins::empty(centroids);
+        got.fill(&refs, centroids, true, BINS);
+        // The reference: the sample one by one, the first half's before the second's
+        // (the order in which ties resolve, see `Bins::add`).
+        let mut want = Bins::empty(centroids);
+        let halves = if n < TWO_SETS_MIN {
+            vec![&refs[..]]
+        } else {
+            let (front, back) = refs.split_at(n / 2);
+            vec![front, &back[..front.len()]]
+        };
+        let mut sample = 0;
+        for half in halves {
+            // Whole runs of `SAMPLE_STRIDE` only.
+            let runs = half.len() / SAMPLE_STRIDE * SAMPLE_STRIDE;
+            for r in half[..runs].iter().step_by(SAMPLE_STRIDE) {
+                want.add_one(r);
+                sample += 1;
+            }
+        }
+        assert!(sample >= n / SAMPLE_STRIDE - 1, "{n}: {sample}");
+        assert_eq!(want.counts, got.counts, "{n}");
+        for axis in 0..3 {
+            for k in 0..BINS {
+                let bits = |b: &Bins| b.boxes[axis][k].0.map(f32::to_bits);
+                assert_eq!(bits(&want), bits(&got), "{n} prims, axis {axis} bin {k}");
+            }
+        }
+    }
+}
+
+#[test]
+fn bounded_partition_bounds_each_side_exactly() {
+    // The order and centroid boxes are `partition`'s; the node boxes each side's own.
+    let mut rng = Lcg(0x9b05_688c_2b3e_6c1f);
+    for round in 0..100 {
+        let n = 2 + rng.below(3000) as usize;
+        let refs = random_refs(&mut rng, n);
+        let centroids = NodeBounds::of(&refs).centroids;
+        let mut bins = Bins::empty(centroids);
+        bins.fill(&refs, centroids, true, BINS);
+        let Some(plane) = best_sah_plane(&bins) else {
+            continue;
+        };
+        let (mut got, mut want) = (refs.clone(), refs.clone());
+        let (gm, gl, gr) = partition_bounded(&mut got, &bins, &plane);
+        let (wm, wl, wr) = partition(&mut want, &bins, &plane);
+        let order = |v: &[PrimRef]| v.iter().map(PrimRef::index).collect::<Vec<_>>();
+        assert_eq!((gm, order(&got)), (wm, order(&want)), "round {round}");
+        let bits = |b: Box4| {
+            let b = BinBox::of(b).0.map(f32::to_bits);
+            // The fourth lanes are not coordinates.
+            [b[0], b[1], b[2], b[4], b[5], b[6]]
+        };
+        assert_eq!(
+            (bits(gl.centroids), bits(gr.centroids)),
+            (bits(wl), bits(wr))
+        );
+        let (exact_l, exact_r) = (NodeBounds::of(&got[..gm]), NodeBounds::of(&got[gm..]));
+        assert_eq!(bits(gl.node), bits(exact_l.node), "round {round}");
+        assert_eq!(bits(gr.node), bits(exact_r.node), "round {round}");
+    }
+}
+
+#[test]
+fn few_bins_in_reused_scratch_match_fresh_bins() {
+    // Nodes alternately of 16 and 8 bins in one scratch: the bins from 8 on keep the
+    // previous node's boxes, which nothing may read.
+    let mut rng = Lcg(0x1f83_d9ab_fb41_bd6b);
+    let mut scratch = Bins::empty(Box4::EMPTY);
+    for round in 0..400 {
+        let n = 2 + rng.below(300) as usize;
+        let refs = random_refs(&mut rng, n);
+        let centroids = NodeBounds::of(&refs).centroids;
+        let count = if round % 2 == 0 { BINS } else { FEW_BINS };
+        scratch.fill(&refs, centroids, false, count);
+        let mut fresh = Bins::empty(centroids);
+        fresh.reset(centroids, count);
+        for r in &refs {
+            fresh.add_one(r);
+        }
+        for axis in 0..3 {
+            let c = scratch.counts[axis];
+            assert_eq!(c, fresh.counts[axis], "round {round}");
+            assert!(c[count..].iter().all(|&k| k == 0), "round {round}");
+            if scratch.scale[axis] > 0.0 {
+                assert!(
+                    c[count - 1] > 0,
+                    "round {round}: the last bin holds the max"
+                );
+            }
+        }
+        let (got, want) = (best_sah_plane(&scratch), best_sah_plane(&fresh));
+        assert_eq!(got.is_some(), want.is_some(), "round {round}");
+        let (Some(got), Some(want)) = (got, want) else {
+            continue;
+        };
+        assert!(got.bin < count, "round {round}");
+        let key = |p: &Plane| (p.axis, p.bin, p.occupied, p.cost.to_bits());
+        assert_eq!(key(&got), key(&want), "round {round}");
+        let bits = |(l, r): (Box4, Box4)| [l, r].map(|b| BinBox::of(b).0.map(f32::to_bits));
+        assert_eq!(
+            bits(scratch.boxes_around(&got)),
+            bits(fresh.boxes_around(&want))
+        );
     }
 }
