@@ -27,7 +27,7 @@ use super::leaf::LANES;
 mod bins;
 mod rooms;
 
-use bins::{Bins, best_sah_plane, partition, partition_bounded};
+use bins::{Bins, best_sah_plane, partition};
 
 /// Number of SAH bins per axis.
 const BINS: usize = 16;
@@ -45,11 +45,6 @@ const MIN_LEAF: usize = 4;
 const MAX_LEAF: usize = 8;
 /// Nodes at least this large bin into two sets of bins (see [`Bins::add`]).
 const TWO_SETS_MIN: usize = 256;
-/// Nodes at least this large (and binned on one thread, see [`sampled`]) choose their
-/// plane from the bins of every [`SAMPLE_STRIDE`]-th primitive.
-const SAMPLE_MIN: usize = 1024;
-/// See [`SAMPLE_MIN`].
-const SAMPLE_STRIDE: usize = 2;
 /// Subtrees at least this large are built in parallel.
 const PARALLEL_MIN: usize = 4096;
 /// Nodes at least this large are binned in parallel chunks of this size.
@@ -389,18 +384,6 @@ fn bin_count(n: usize) -> usize {
     }
 }
 
-/// Whether a node of `n` primitives chooses its plane from the bins of a sample (every
-/// [`SAMPLE_STRIDE`]-th primitive): binning is about half of the build, and from
-/// [`SAMPLE_MIN`] primitives on half of them place the plane about as well. The
-/// partition still moves and bounds all of them exactly. The 100k torus' SAH cost goes
-/// from 17.299 to 17.306 (+0.04%; 1M 20.355 to 20.386) and its build takes 5% less time.
-/// Not for the nodes large enough to bin in parallel chunks: the tori's roots have
-/// near-tied planes that a sample resolved to a worse one (SAH cost +3.4%).
-#[inline(always)]
-fn sampled(n: usize) -> bool {
-    (SAMPLE_MIN..2 * PARALLEL_BIN_CHUNK).contains(&n)
-}
-
 /// Partitions `refs`; returns the size of the first part and both parts'
 /// bounds, or None for a leaf. One clone per instruction set, picked at run time
 /// (as the BVH queries): the binning and partition loops inlined into it use three-
@@ -428,10 +411,9 @@ fn split(
         return Some(median_split(refs, ext));
     }
     let area = b.node.surface_area();
-    let sampled = sampled(n);
     let sah = if area > 0.0 {
         let count = bin_count(n);
-        bins.fill(refs, b.centroids, sampled, count);
+        bins.fill(refs, b.centroids, count);
         best_sah_plane(bins)
     } else {
         // Flat, zero-area node (e.g. collinear points): SAH is undefined.
@@ -439,20 +421,15 @@ fn split(
     };
     match sah {
         Some(plane) if n > MAX_LEAF || TRAVERSAL_COST + plane.cost / area < blocks(n as u32) => {
-            let (mid, lb, rb) = if sampled {
-                partition_bounded(refs, bins, &plane)
-            } else {
-                let (mid, lc, rc) = partition(refs, bins, &plane);
-                let (ln, rn) = bins.boxes_around(&plane);
-                let side = |node, centroids| NodeBounds { node, centroids };
-                (mid, side(ln, lc), side(rn, rc))
-            };
+            let (mid, lc, rc) = partition(refs, bins, &plane);
             // Binning and partition agree (`bins_of`, `first_right`), so both sides are
-            // non-empty (a sample's bins too: it is a subset); this guards against it anyway.
+            // non-empty; this guards against it anyway.
             if mid == 0 || mid == n {
                 return Some(median_split(refs, ext));
             }
-            Some((mid, lb, rb))
+            let (ln, rn) = bins.boxes_around(&plane);
+            let side = |node, centroids| NodeBounds { node, centroids };
+            Some((mid, side(ln, lc), side(rn, rc)))
         }
         _ if n > MAX_LEAF => Some(median_split(refs, ext)),
         _ => leaf_or_room(refs, &b, depth),

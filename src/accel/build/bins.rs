@@ -9,10 +9,7 @@ use rayon::prelude::*;
 use wide::bytemuck::cast;
 use wide::{f32x4, i32x4, u32x4};
 
-use super::{
-    BINS, Box4, FEW_BINS, LEAF_BLOCK, Lanes, NodeBounds, PARALLEL_BIN_CHUNK, PrimRef,
-    SAMPLE_STRIDE, TWO_SETS_MIN,
-};
+use super::{BINS, Box4, FEW_BINS, LEAF_BLOCK, Lanes, PARALLEL_BIN_CHUNK, PrimRef, TWO_SETS_MIN};
 
 /// A box as its lower corner and its negated upper corner, the bins' form: growing
 /// it is one lane-wise min over all eight lanes. `-a < -b` exactly when `a > b`, so
@@ -178,10 +175,9 @@ impl Bins {
 
     /// Bins `refs` into `count` bins per axis ([`BINS`] or [`FEW_BINS`]) of `self`
     /// (scratch reused across nodes: no copies of its 2.3 KB), in parallel chunks of
-    /// [`BINS`] when there are many, else only every [`SAMPLE_STRIDE`]-th primitive
-    /// when `sampled` (see [`super::sampled`]).
+    /// [`BINS`] when there are many.
     #[inline(always)]
-    pub(super) fn fill(&mut self, refs: &[PrimRef], centroids: Box4, sampled: bool, count: usize) {
+    pub(super) fn fill(&mut self, refs: &[PrimRef], centroids: Box4, count: usize) {
         if refs.len() >= 2 * PARALLEL_BIN_CHUNK {
             *self = refs
                 .par_chunks(PARALLEL_BIN_CHUNK)
@@ -189,11 +185,7 @@ impl Bins {
                 .reduce(|| Bins::empty(centroids), Bins::merge);
         } else {
             self.reset(centroids, count);
-            if sampled {
-                self.add_every::<SAMPLE_STRIDE>(refs);
-            } else {
-                self.add(refs);
-            }
+            self.add(refs);
         }
     }
 
@@ -225,31 +217,22 @@ impl Bins {
     /// (+0 and -0) resolve as one pass would resolve them, bit for bit.
     #[inline(always)]
     fn add(&mut self, refs: &[PrimRef]) {
-        self.add_every::<1>(refs);
-    }
-
-    /// [`Bins::add`] of every `S`-th primitive of each half (the first of each run of
-    /// `S`; a last, shorter run is left out when `S > 1`).
-    #[inline(always)]
-    fn add_every<const S: usize>(&mut self, refs: &[PrimRef]) {
         if refs.len() < TWO_SETS_MIN {
-            for r in refs.chunks_exact(S) {
-                self.add_one(&r[0]);
+            for r in refs {
+                self.add_one(r);
             }
             return;
         }
         let mut second = Bins::empty(Box4::EMPTY);
         (second.min, second.scale, second.last) = (self.min, self.scale, self.last);
         let (front, back) = refs.split_at(refs.len() / 2);
-        for (a, b) in front.chunks_exact(S).zip(back.chunks_exact(S)) {
-            self.add_one(&a[0]);
-            second.add_one(&b[0]);
+        for (a, b) in front.iter().zip(back) {
+            self.add_one(a);
+            second.add_one(b);
         }
         // `back` has one more when the count is odd.
-        if S == 1 {
-            for r in &back[front.len()..] {
-                second.add_one(r);
-            }
+        for r in &back[front.len()..] {
+            second.add_one(r);
         }
         self.merge_in(&second);
     }
@@ -496,54 +479,21 @@ fn first_right(min: f32, scale: f32, bin: usize) -> f32 {
 /// it decides the primitive order in the leaves.
 #[inline(always)]
 pub(super) fn partition(refs: &mut [PrimRef], bins: &Bins, plane: &Plane) -> (usize, Box4, Box4) {
-    let (mid, [left, right], _) = partition_by::<false>(refs, bins, plane);
-    (mid, left, right)
-}
-
-/// [`partition`] that also bounds both sides' primitives: for nodes whose bins saw
-/// only a sample of them ([`Bins::fill`]), so that [`Bins::boxes_around`] would not.
-#[inline(always)]
-pub(super) fn partition_bounded(
-    refs: &mut [PrimRef],
-    bins: &Bins,
-    plane: &Plane,
-) -> (usize, NodeBounds, NodeBounds) {
-    let (mid, [lc, rc], [ln, rn]) = partition_by::<true>(refs, bins, plane);
-    let side = |node: BinBox, centroids| NodeBounds {
-        node: node.box4(),
-        centroids,
-    };
-    (mid, side(ln, lc), side(rn, rc))
-}
-
-/// [`partition`], with both sides' boxes when `NODES`.
-#[inline(always)]
-fn partition_by<const NODES: bool>(
-    refs: &mut [PrimRef],
-    bins: &Bins,
-    plane: &Plane,
-) -> (usize, [Box4; 2], [BinBox; 2]) {
     let axis = plane.axis % 3;
     let first = first_right(bins.min[axis], bins.scale[axis], plane.bin);
     // One loop per axis: a lane picked at run time went through memory.
     match axis {
-        0 => partition_on::<0, NODES>(refs, first),
-        1 => partition_on::<1, NODES>(refs, first),
-        _ => partition_on::<2, NODES>(refs, first),
+        0 => partition_on::<0>(refs, first),
+        1 => partition_on::<1>(refs, first),
+        _ => partition_on::<2>(refs, first),
     }
 }
 
-/// [`partition`] on axis `AXIS`: centroids below `first_right` go left. The sides'
-/// boxes grow as bins do ([`BinBox::grow`]) when `NODES`.
+/// [`partition`] on axis `AXIS`: centroids below `first_right` go left.
 #[inline(always)]
-fn partition_on<const AXIS: usize, const NODES: bool>(
-    refs: &mut [PrimRef],
-    first_right: f32,
-) -> (usize, [Box4; 2], [BinBox; 2]) {
+fn partition_on<const AXIS: usize>(refs: &mut [PrimRef], first_right: f32) -> (usize, Box4, Box4) {
     let mut left = Box4::EMPTY;
     let mut right = Box4::EMPTY;
-    let mut left_node = BinBox::EMPTY;
-    let mut right_node = BinBox::EMPTY;
     let mut i = 0;
     let mut j = refs.len();
     while i < j {
@@ -552,22 +502,16 @@ fn partition_on<const AXIS: usize, const NODES: bool>(
         // NaN goes left (the comparison is false).
         if c[AXIS] >= first_right {
             right.grow(c, c);
-            if NODES {
-                right_node.grow(r.flipped());
-            }
             j -= 1;
             // refs.swap(i, j), without its round trip through the stack.
             refs[i] = refs[j];
             refs[j] = r;
         } else {
             left.grow(c, c);
-            if NODES {
-                left_node.grow(r.flipped());
-            }
             i += 1;
         }
     }
-    (i, [left, right], [left_node, right_node])
+    (i, left, right)
 }
 
 #[cfg(test)]

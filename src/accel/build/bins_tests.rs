@@ -3,7 +3,7 @@
 use glam::Vec3;
 use wide::f32x4;
 
-use super::super::{FEW_BINS, NodeBounds, SAMPLE_STRIDE, blocks};
+use super::super::{FEW_BINS, NodeBounds, blocks};
 use super::*;
 use crate::accel::Aabb;
 use crate::test_util::Lcg;
@@ -369,76 +369,6 @@ fn random_refs(rng: &mut Lcg, n: usize) -> Vec<PrimRef> {
 }
 
 #[test]
-fn sampled_bins_hold_every_second_primitive_of_each_half() {
-    let mut rng = Lcg(0x510e_527f_ade6_82d1);
-    for n in [5, TWO_SETS_MIN - 1, TWO_SETS_MIN, 1001, 1030, 4096] {
-        let refs = random_refs(&mut rng, n);
-        let centroids = NodeBounds::of(&refs).centroids;
-        let mut got = Bins::empty(centroids);
-        got.fill(&refs, centroids, true, BINS);
-        // The reference: the sample one by one, the first half's before the second's
-        // (the order in which ties resolve, see `Bins::add`).
-        let mut want = Bins::empty(centroids);
-        let halves = if n < TWO_SETS_MIN {
-            vec![&refs[..]]
-        } else {
-            let (front, back) = refs.split_at(n / 2);
-            vec![front, &back[..front.len()]]
-        };
-        let mut sample = 0;
-        for half in halves {
-            // Whole runs of `SAMPLE_STRIDE` only.
-            let runs = half.len() / SAMPLE_STRIDE * SAMPLE_STRIDE;
-            for r in half[..runs].iter().step_by(SAMPLE_STRIDE) {
-                want.add_one(r);
-                sample += 1;
-            }
-        }
-        assert!(sample >= n / SAMPLE_STRIDE - 1, "{n}: {sample}");
-        assert_eq!(want.counts, got.counts, "{n}");
-        for axis in 0..3 {
-            for k in 0..BINS {
-                let bits = |b: &Bins| b.boxes[axis][k].0.map(f32::to_bits);
-                assert_eq!(bits(&want), bits(&got), "{n} prims, axis {axis} bin {k}");
-            }
-        }
-    }
-}
-
-#[test]
-fn bounded_partition_bounds_each_side_exactly() {
-    // The order and centroid boxes are `partition`'s; the node boxes each side's own.
-    let mut rng = Lcg(0x9b05_688c_2b3e_6c1f);
-    for round in 0..100 {
-        let n = 2 + rng.below(3000) as usize;
-        let refs = random_refs(&mut rng, n);
-        let centroids = NodeBounds::of(&refs).centroids;
-        let mut bins = Bins::empty(centroids);
-        bins.fill(&refs, centroids, true, BINS);
-        let Some(plane) = best_sah_plane(&bins) else {
-            continue;
-        };
-        let (mut got, mut want) = (refs.clone(), refs.clone());
-        let (gm, gl, gr) = partition_bounded(&mut got, &bins, &plane);
-        let (wm, wl, wr) = partition(&mut want, &bins, &plane);
-        let order = |v: &[PrimRef]| v.iter().map(PrimRef::index).collect::<Vec<_>>();
-        assert_eq!((gm, order(&got)), (wm, order(&want)), "round {round}");
-        let bits = |b: Box4| {
-            let b = BinBox::of(b).0.map(f32::to_bits);
-            // The fourth lanes are not coordinates.
-            [b[0], b[1], b[2], b[4], b[5], b[6]]
-        };
-        assert_eq!(
-            (bits(gl.centroids), bits(gr.centroids)),
-            (bits(wl), bits(wr))
-        );
-        let (exact_l, exact_r) = (NodeBounds::of(&got[..gm]), NodeBounds::of(&got[gm..]));
-        assert_eq!(bits(gl.node), bits(exact_l.node), "round {round}");
-        assert_eq!(bits(gr.node), bits(exact_r.node), "round {round}");
-    }
-}
-
-#[test]
 fn few_bins_in_reused_scratch_match_fresh_bins() {
     // Nodes alternately of 16 and 8 bins in one scratch: the bins from 8 on keep the
     // previous node's boxes, which nothing may read.
@@ -449,7 +379,7 @@ fn few_bins_in_reused_scratch_match_fresh_bins() {
         let refs = random_refs(&mut rng, n);
         let centroids = NodeBounds::of(&refs).centroids;
         let count = if round % 2 == 0 { BINS } else { FEW_BINS };
-        scratch.fill(&refs, centroids, false, count);
+        scratch.fill(&refs, centroids, count);
         let mut fresh = Bins::empty(centroids);
         fresh.reset(centroids, count);
         for r in &refs {
