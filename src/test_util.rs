@@ -4,6 +4,17 @@
 
 use glam::{Vec3, vec3};
 
+/// Pearson's chi-square statistic of `counts` against a uniform spread of their total
+/// over the bins (degrees of freedom: bins - 1).
+pub fn chi_square(counts: &[u32]) -> f64 {
+    let total: f64 = counts.iter().map(|&c| f64::from(c)).sum();
+    let expected = total / counts.len() as f64;
+    counts
+        .iter()
+        .map(|&c| (f64::from(c) - expected).powi(2) / expected)
+        .sum()
+}
+
 /// Small deterministic random stream (a 64-bit LCG), so tests need no extra crate.
 pub struct Lcg(pub u64);
 

@@ -140,11 +140,7 @@ mod tests {
             let by = ((back.y * 4.0) as usize).min(3);
             bins[by * 4 + bx] += 1;
         }
-        let expected = f64::from(n) / 16.0;
-        let chi2: f64 = bins
-            .iter()
-            .map(|&c| (f64::from(c) - expected).powi(2) / expected)
-            .sum();
+        let chi2 = crate::test_util::chi_square(&bins);
         // 15 degrees of freedom: the critical value at p = 1e-4 is about 42.6.
         assert!(chi2 < 42.6, "chi2 {chi2}: {bins:?}");
     }

@@ -51,11 +51,7 @@ fn chi_square_2d_pixel_samples() {
         let by = (p.y * 8.0) as usize;
         bins[by * 8 + bx] += 1;
     }
-    let expected = f64::from(n) / 64.0;
-    let chi2: f64 = bins
-        .iter()
-        .map(|&c| (f64::from(c) - expected).powi(2) / expected)
-        .sum();
+    let chi2 = crate::test_util::chi_square(&bins);
     // 63 degrees of freedom: the critical value at p = 1e-4 is about 113.6.
     assert!(chi2 < 113.6, "chi2 {chi2}");
     // And not suspiciously perfect (p = 1e-4 lower tail is about 29).
