@@ -15,7 +15,8 @@
 //! (every other row traces all instances flattened into copies). Peers: `obvhs` (CWBVH, always); tinybvh's
 //! BVH8_CPU (`Intersect`, `IsOccluded`; AVX2 + FMA) when build.rs could
 //! compile it, see `glint_bench::tinybvh`; Embree 4 when `GLINT_EMBREE_LIB`
-//! names its library (see `glint_bench::embree`). Every peer calls its
+//! names its library (see `glint_bench::embree`; `GLINT_EMBREE_CONFIG` adds device
+//! settings, e.g. `hugepages=1`). Every peer calls its
 //! library once per ray. Build times are for one thread and for the global
 //! rayon pool (glint) or Embree's default thread count (Embree); obvhs and
 //! tinybvh build on one thread here.
@@ -395,11 +396,26 @@ fn bench_mesh(
     }
 }
 
+/// Extra Embree device settings, appended to both devices' configuration strings.
+const CONFIG_VAR: &str = "GLINT_EMBREE_CONFIG";
+
 fn main() {
     // `cargo bench` passes `--bench`; a name filter picks meshes by label.
     let filter: Option<String> = std::env::args().skip(1).find(|a| !a.starts_with('-'));
     let wanted = |label: &str| filter.as_deref().is_none_or(|f| label.contains(f));
-    let embree = match Embree::load("threads=1").and_then(|e1| Ok((e1, Embree::load("")?))) {
+    // Extra device settings for both Embree devices (e.g. `hugepages=1`), so that a
+    // setting glint's side gets can be given to Embree too and compared.
+    let extra = std::env::var(CONFIG_VAR).unwrap_or_default();
+    let config = |threads: &str| {
+        [threads, extra.as_str()]
+            .into_iter()
+            .filter(|s| !s.is_empty())
+            .collect::<Vec<_>>()
+            .join(",")
+    };
+    let embree = match Embree::load(&config("threads=1"))
+        .and_then(|e1| Ok((e1, Embree::load(&config(""))?)))
+    {
         Ok(e) => Some(e),
         Err(e) => {
             println!("skipping the Embree rows: {e}");
