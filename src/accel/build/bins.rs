@@ -193,9 +193,15 @@ impl Bins {
     fn reset(&mut self, centroids: Box4, count: usize) {
         let (min, max) = (centroids.min, centroids.max);
         self.min = min;
+        // The fourth lane, the tagged index's ([`super::INDEX_TAG`]), scales by zero, so
+        // that its bin positions are 0 or NaN (never subnormal) and cost no time.
         self.scale = std::array::from_fn(|i| {
             let ext = max[i] - min[i];
-            if ext > 0.0 { count as f32 / ext } else { 0.0 }
+            if i < 3 && ext > 0.0 {
+                count as f32 / ext
+            } else {
+                0.0
+            }
         });
         self.last = (count - 1) as f32;
         self.counts = [[0; BINS]; ROWS];
