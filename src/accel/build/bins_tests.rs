@@ -411,3 +411,34 @@ fn few_bins_in_reused_scratch_match_fresh_bins() {
         );
     }
 }
+
+#[test]
+fn index_lane_keeps_the_index_and_never_goes_subnormal() {
+    // The index's lane takes part in the centroid and the bin positions unmasked: its
+    // values there must never be subnormal (slow), whatever the index below 2^30 - 2^23.
+    let slow = |v: f32| v.is_subnormal();
+    let b = Aabb::new(Vec3::splat(-1e-30), Vec3::splat(1e-30));
+    let mut rng = Lcg(0x9b05_688c_2b3e_6c1f);
+    let mut indices: Vec<usize> = vec![0, 1, 2, 255, 1 << 23, (1 << 30) - (1 << 23) - 1];
+    indices.extend((0..200).map(|_| rng.below(1 << 24) as usize));
+    let refs: Vec<PrimRef> = indices.iter().map(|&i| PrimRef::new(i, &b)).collect();
+    for (r, &i) in refs.iter().zip(&indices) {
+        assert_eq!(r.index() as usize, i);
+        let c = r.centroid();
+        assert!(
+            !slow(c[3]) && c[3].is_finite(),
+            "index {i}: centroid lane {}",
+            c[3]
+        );
+    }
+    let centroids = NodeBounds::of(&refs).centroids;
+    let bins = Bins::empty(centroids);
+    // Differences of floats of magnitude 1 or more are not subnormal, and a zero scale
+    // makes them zero (or NaN).
+    assert_eq!(bins.scale[3], 0.0);
+    let min = f32x4::from(bins.min);
+    for r in &refs {
+        let d = (r.centroid_x4() - min).to_array()[3];
+        assert!(!slow(d), "difference {d}");
+    }
+}
