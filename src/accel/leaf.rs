@@ -17,6 +17,7 @@ use glam::Vec3;
 use wide::u32x4;
 
 use super::Ray;
+use super::huge::{HugeSlice, HugeVec};
 use super::triangle::{RayShear, TriangleHit, intersect_triangle_flagged, is_degenerate};
 
 /// Triangles per group. Four beat eight on the 100k torus: the binned-SAH leaves
@@ -34,7 +35,7 @@ const ALL_LANES: u32 = (1 << LANES) - 1;
 /// it shares a cache line with the vertices' last row, which the leaf test has just
 /// read. 160 bytes aligned to 32, so that the indices and that row are always in one
 /// line (for no memory: the array held as many indices).
-#[derive(Clone, Copy, Debug)]
+#[derive(Clone, Copy, Debug, bytemuck::Pod, bytemuck::Zeroable)]
 #[repr(C, align(32))]
 pub struct TriGroup {
     /// Vertex coordinates: `v[vertex][axis][lane]`; NaN in padding lanes.
@@ -79,7 +80,7 @@ pub struct LeafTris {
     /// with one load. Per lane rather than per triangle plus each group's first slot:
     /// smaller while groups average less than one padding lane (Sponza 64.5 -> 63.8
     /// bytes per triangle).
-    pub groups: Vec<TriGroup>,
+    pub groups: HugeSlice<TriGroup>,
 }
 
 /// [`TriGroup::prim`] of a padding lane: no triangle (a triangle count is below it).
@@ -123,40 +124,34 @@ pub fn lane_mask(i: usize, count: usize) -> u32 {
     }
 }
 
+/// Appends to `groups` (the [`LeafTris::groups`] being made) the groups of the leaf of
+/// `count` triangles at slot `slot` of `prims`; returns the wide node's `(child, count)`
+/// for it ([`leaf_lane`]). Leaves pushed in slot order keep the groups in the
+/// triangles' order: neighbouring leaves stay close.
+pub fn push_leaf(
+    groups: &mut HugeVec<TriGroup>,
+    slot: u32,
+    count: u32,
+    prims: &[u32],
+    positions: &[[Vec3; 3]],
+) -> (u32, u32) {
+    let first_group = groups.len();
+    let (slot, end) = (slot as usize, (slot + count) as usize);
+    let mut degenerate = false;
+    for start in (slot..end).step_by(LANES) {
+        let mut group = TriGroup::PADDING;
+        for k in start..(start + LANES).min(end) {
+            let tri @ [a, b, c] = positions[prims[k] as usize];
+            degenerate |= is_degenerate(a, b, c);
+            group.set_triangle(k - start, tri);
+            group.prim[k - start] = prims[k];
+        }
+        groups.push(group);
+    }
+    leaf_lane(first_group, count, degenerate)
+}
+
 impl LeafTris {
-    /// Room for `groups` groups.
-    pub fn with_capacity(groups: usize) -> LeafTris {
-        LeafTris {
-            groups: Vec::with_capacity(groups),
-        }
-    }
-
-    /// Appends the groups of the leaf of `count` triangles at slot `slot` of `prims`;
-    /// returns the wide node's `(child, count)` for it ([`leaf_lane`]). Leaves pushed in
-    /// slot order keep the groups in the triangles' order: neighbouring leaves stay close.
-    pub fn push_leaf(
-        &mut self,
-        slot: u32,
-        count: u32,
-        prims: &[u32],
-        positions: &[[Vec3; 3]],
-    ) -> (u32, u32) {
-        let first_group = self.groups.len();
-        let (slot, end) = (slot as usize, (slot + count) as usize);
-        let mut degenerate = false;
-        for start in (slot..end).step_by(LANES) {
-            let mut group = TriGroup::PADDING;
-            for k in start..(start + LANES).min(end) {
-                let tri @ [a, b, c] = positions[prims[k] as usize];
-                degenerate |= is_degenerate(a, b, c);
-                group.set_triangle(k - start, tri);
-                group.prim[k - start] = prims[k];
-            }
-            self.groups.push(group);
-        }
-        leaf_lane(first_group, count, degenerate)
-    }
-
     /// Bytes held.
     pub fn bytes(&self) -> usize {
         size_of_val(self.groups.as_slice())

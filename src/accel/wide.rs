@@ -15,7 +15,8 @@
 //! same t is met first.
 
 use super::bvh::{Bvh, MAX_DEPTH};
-use super::leaf::{LANES, LeafTris, NO_PRIM, groups_for};
+use super::huge::{Backing, HugeSlice, HugeVec};
+use super::leaf::{LANES, LeafTris, NO_PRIM, groups_for, push_leaf};
 use super::wide_collapse::collapse;
 use super::wide_node::{EMPTY, RayBoxes, leaf_lanes};
 pub use super::wide_node::{WIDTH, WideNode};
@@ -28,7 +29,7 @@ use glam::Vec3;
 #[derive(Clone, Debug, Default)]
 pub struct WideBvh {
     /// Nodes, each after its parent; empty for no triangles.
-    pub nodes: Vec<WideNode>,
+    pub nodes: HugeSlice<WideNode>,
     /// Triangle vertices in leaf order, in groups of `leaf::LANES`, each with the
     /// caller's index of its triangles.
     pub leaves: LeafTris,
@@ -68,6 +69,12 @@ impl WideBvh {
     /// of up to `wide_collapse::MAX_LEAF` triangles (see `wide_collapse`); the
     /// triangles keep the binary tree's order.
     pub fn collapse(bvh: &Bvh, positions: &[[Vec3; 3]]) -> WideBvh {
+        WideBvh::collapse_backed(bvh, positions, Backing::Auto)
+    }
+
+    /// [`WideBvh::collapse`] with the nodes and leaf groups kept as `backing` says
+    /// (huge-page mappings from 2 MiB on with `Auto`; tests force either).
+    pub(super) fn collapse_backed(bvh: &Bvh, positions: &[[Vec3; 3]], backing: Backing) -> WideBvh {
         if bvh.nodes.is_empty() {
             return WideBvh::default();
         }
@@ -77,24 +84,35 @@ impl WideBvh {
             .filter(|n| n.is_leaf())
             .map(|n| groups_for(n.count as usize))
             .sum();
-        let mut leaves = LeafTris::with_capacity(groups);
-        let mut nodes = Vec::with_capacity(wide_node_estimate(bvh.nodes.len()));
+        let mut leaves = HugeVec::with_backing(groups, backing);
+        let nodes = wide_node_estimate(bvh.nodes.len());
+        let mut nodes = HugeVec::with_backing(nodes, backing);
         let depth = collapse(bvh, &mut nodes, &mut |slot, count| {
-            leaves.push_leaf(slot, count, &bvh.prim_indices, positions)
+            push_leaf(&mut leaves, slot, count, &bvh.prim_indices, positions)
         });
         nodes.shrink_to_fit();
         WideBvh {
-            nodes,
-            leaves,
+            nodes: nodes.into(),
+            leaves: LeafTris {
+                groups: leaves.into(),
+            },
             triangles: bvh.prim_indices.len(),
             bounds: bvh.bounds(),
             depth,
         }
     }
 
-    /// Bytes held: nodes, triangles and indices.
+    /// Bytes held: nodes, triangles and indices (not the huge-page mappings' unused
+    /// room: see [`WideBvh::reserved_bytes`]).
     pub fn bytes(&self) -> usize {
         size_of_val(self.nodes.as_slice()) + self.leaves.bytes()
+    }
+
+    /// Bytes of address space the nodes and leaf groups reserve: a large array's
+    /// mapping is whole huge pages and one more for alignment, of which only the
+    /// pages touched take memory (the array rounded up to a huge page).
+    pub fn reserved_bytes(&self) -> usize {
+        self.nodes.reserved_bytes() + self.leaves.groups.reserved_bytes()
     }
 
     /// The caller's index of the triangle in lane `lane` of group `group` (a lane

@@ -15,6 +15,7 @@ use arrayvec::ArrayVec;
 
 use super::Aabb;
 use super::bvh::Bvh;
+use super::huge::HugeVec;
 use super::leaf::{LANES, groups_for};
 use super::wide_node::{WIDTH, WideNode};
 
@@ -193,7 +194,7 @@ impl Costs {
         bvh: &Bvh,
         b: usize,
         depth: u32,
-        out: &mut Vec<WideNode>,
+        out: &mut HugeVec<WideNode>,
         leaf: &mut impl FnMut(u32, u32) -> (u32, u32),
     ) -> (u32, u32) {
         let me = out.len();
@@ -227,7 +228,7 @@ impl Costs {
 /// count]`).
 pub(super) fn collapse(
     bvh: &Bvh,
-    out: &mut Vec<WideNode>,
+    out: &mut HugeVec<WideNode>,
     leaf: &mut impl FnMut(u32, u32) -> (u32, u32),
 ) -> u32 {
     Costs::new(bvh).node(bvh, 0, 0, out, leaf).1

@@ -62,9 +62,9 @@ fn tree_cost(nodes: &[WideNode], root: f32) -> f64 {
 }
 
 fn costed_collapse(bvh: &Bvh) -> Vec<WideNode> {
-    let mut nodes = Vec::new();
+    let mut nodes = HugeVec::new();
     crate::accel::wide_collapse::collapse(bvh, &mut nodes, &mut |slot, count| (slot, count));
-    nodes
+    nodes.to_vec()
 }
 
 #[test]
@@ -115,13 +115,14 @@ fn reference_leaves(bvh: &Bvh, tris: &[Tri]) -> (Vec<WideNode>, LeafTris) {
         }
     }
     lanes.sort_unstable();
-    let mut leaves = LeafTris::default();
+    let mut groups = HugeVec::new();
     for (slot, i, lane) in lanes {
         let count = nodes[i].count[lane];
         (nodes[i].child[lane], nodes[i].count[lane]) =
-            leaves.push_leaf(slot, count, &bvh.prim_indices, tris);
+            push_leaf(&mut groups, slot, count, &bvh.prim_indices, tris);
     }
-    (nodes, leaves)
+    let groups = groups.into();
+    (nodes, LeafTris { groups })
 }
 
 #[test]

@@ -16,7 +16,7 @@ pub(super) const EMPTY: u32 = u32::MAX;
 
 /// A node of up to `WIDTH` children; box planes are SoA: `bounds[axis][lane]` for the
 /// minimum corner (axis 0..3) and `bounds[3 + axis][lane]` for the maximum.
-#[derive(Clone, Copy, Debug, PartialEq)]
+#[derive(Clone, Copy, Debug, PartialEq, bytemuck::Pod, bytemuck::Zeroable)]
 #[repr(C, align(64))]
 pub struct WideNode {
     /// Child boxes: min x, y, z then max x, y, z, one lane per child.

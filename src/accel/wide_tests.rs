@@ -107,20 +107,22 @@ fn validate_catches_a_shrunken_box_and_a_wrong_triangle() {
     let lane = (0..WIDTH)
         .find(|&l| bad.nodes[0].child[l] != EMPTY)
         .unwrap();
-    bad.nodes[0].bounds[3][lane] = bad.nodes[0].bounds[0][lane];
+    bad.nodes
+        .modify(|n| n[0].bounds[3][lane] = n[0].bounds[0][lane]);
     assert!(bad.validate(&tris).is_err());
     let mut bad = wide.clone();
-    bad.leaves.groups[0].v[0][0][0] += 1.0;
+    bad.leaves.groups.modify(|g| g[0].v[0][0][0] += 1.0);
     assert!(bad.validate(&tris).is_err());
     // A padding lane that could hit: a copy of lane 0's triangle.
     let mut bad = wide.clone();
     let g = bad.nodes.iter().find_map(|n| {
         (0..WIDTH).find_map(|l| (1..4).contains(&n.count[l]).then_some(n.child[l] as usize))
     });
-    let g = &mut bad.leaves.groups[g.unwrap()];
-    for axis in g.v.iter_mut().flatten() {
-        axis[3] = axis[0];
-    }
+    bad.leaves.groups.modify(|groups| {
+        for axis in groups[g.unwrap()].v.iter_mut().flatten() {
+            axis[3] = axis[0];
+        }
+    });
     assert!(bad.validate(&tris).is_err());
 }
 
@@ -131,20 +133,22 @@ fn validate_catches_a_wrong_triangle_index_in_a_lane() {
     wide.validate(&tris).unwrap();
     let prims: Vec<u32> = wide.leaves.prims().collect();
     let padding = prims.iter().position(|&p| p == NO_PRIM).unwrap();
-    fn prim(w: &mut WideBvh, lane: usize) -> &mut u32 {
-        &mut w.leaves.groups[lane / LANES].prim[lane % LANES]
+    fn set_prim(w: &mut WideBvh, lane: usize, prim: u32) {
+        w.leaves
+            .groups
+            .modify(|g| g[lane / LANES].prim[lane % LANES] = prim);
     }
     let mut broken = Vec::new();
     // Two lanes' indices swapped: each names the other's vertices.
     let mut bad = wide.clone();
-    bad.leaves.groups[0].prim.swap(0, 1);
+    bad.leaves.groups.modify(|g| g[0].prim.swap(0, 1));
     broken.push(bad);
     // A padding lane naming a triangle, a triangle's lane naming none.
     let mut bad = wide.clone();
-    *prim(&mut bad, padding) = prims[0];
+    set_prim(&mut bad, padding, prims[0]);
     broken.push(bad);
     let mut bad = wide.clone();
-    *prim(&mut bad, 0) = NO_PRIM;
+    set_prim(&mut bad, 0, NO_PRIM);
     broken.push(bad);
     // A wrong count.
     let mut bad = wide.clone();
@@ -518,16 +522,61 @@ fn degenerate_triangles_are_flagged_and_never_hit() {
     // A missing flag, or one on a leaf of ordinary triangles, fails validation.
     let mut bad = wide.clone();
     let (i, l) = flagged[0];
-    bad.nodes[i].count[l] &= !DEGENERATE;
+    bad.nodes.modify(|n| n[i].count[l] &= !DEGENERATE);
     assert!(bad.validate(&tris).is_err());
     let mut bad = wide.clone();
     let (i, l) = (0..wide.nodes.len())
         .flat_map(|i| (0..WIDTH).map(move |l| (i, l)))
         .find(|&(i, l)| (1..DEGENERATE).contains(&wide.nodes[i].count[l]))
         .unwrap();
-    bad.nodes[i].count[l] |= DEGENERATE;
+    bad.nodes.modify(|n| n[i].count[l] |= DEGENERATE);
     assert!(bad.validate(&tris).is_err());
 }
 
 #[path = "wide_collapse_tests.rs"]
 mod collapse;
+
+#[test]
+fn the_wide_bvh_is_the_same_whichever_memory_backs_it() {
+    // Small (below a huge page: a Vec with `Auto`) and large (about 3 MiB of leaf
+    // groups: mapped with `Auto`), each built on every backing.
+    for (n, large) in [(2000, false), (80_000, true)] {
+        let tris = random_tris(n, 31);
+        let (bvh, auto) = both(&tris, SplitMethod::SahBinned);
+        assert_eq!(auto.leaves.groups.is_mapped(), large);
+        let heap = WideBvh::collapse_backed(&bvh, &tris, Backing::Heap);
+        let mapped = WideBvh::collapse_backed(&bvh, &tris, Backing::Mapped);
+        assert!(!heap.nodes.is_mapped() && !heap.leaves.groups.is_mapped());
+        assert!(mapped.nodes.is_mapped() && mapped.leaves.groups.is_mapped());
+        let bits = |w: &WideBvh| -> Vec<u32> {
+            let v = w
+                .leaves
+                .groups
+                .iter()
+                .flat_map(|g| g.v.as_flattened().as_flattened());
+            v.map(|x| x.to_bits()).collect()
+        };
+        for w in [&heap, &mapped, &mapped.clone(), &heap.clone()] {
+            w.validate(&tris).unwrap();
+            assert_eq!(w.nodes, auto.nodes);
+            assert!(w.leaves.prims().eq(auto.leaves.prims()));
+            assert_eq!(bits(w), bits(&auto));
+            assert_eq!(
+                (w.triangles, w.depth, w.bytes()),
+                (auto.triangles, auto.depth, auto.bytes())
+            );
+        }
+        assert!(mapped.clone().nodes.is_mapped() && !heap.clone().nodes.is_mapped());
+        for (ray, t_max) in rays(2000, 32) {
+            let want = auto
+                .closest_hit(&ray, t_max)
+                .map(|(p, h)| (p, h.t.to_bits()));
+            let occluded = auto.any_hit(&ray, t_max, |_, _| true);
+            for w in [&heap, &mapped] {
+                let got = w.closest_hit(&ray, t_max).map(|(p, h)| (p, h.t.to_bits()));
+                assert_eq!(got, want, "{ray:?}");
+                assert_eq!(w.any_hit(&ray, t_max, |_, _| true), occluded);
+            }
+        }
+    }
+}
