@@ -28,7 +28,7 @@ use glam::Vec3;
 use wide::u32x8;
 
 use super::bvh::MAX_DEPTH;
-use super::leaf::{LANES, LaneValues, TriGroup, groups_for, leaf_count};
+use super::leaf::{Decided, LANES, LaneValues, TriGroup, groups_for, leaf_count};
 use super::ray_lanes::Lanes;
 use super::segment_box::SegmentBox;
 use super::triangle::{RayShear, TriangleHit, intersect_triangle_flagged};
@@ -424,13 +424,13 @@ impl PacketCandidates {
         origin: Vec3,
         t_max: f32,
     ) -> Option<TriangleHit> {
-        self.decide(
-            r,
-            t_max,
-            may_be_degenerate,
-            || tri,
-            || intersect_triangle_flagged(shear, origin, tri, t_max, may_be_degenerate),
-        )
+        match self.decide(r, t_max, may_be_degenerate, || tri) {
+            Decided::Hit(h) => Some(h),
+            Decided::Miss => None,
+            Decided::Scalar => {
+                intersect_triangle_flagged(shear, origin, tri, t_max, may_be_degenerate)
+            }
+        }
     }
 }
 

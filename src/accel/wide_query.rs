@@ -15,7 +15,7 @@
 use multiversion::target::match_target;
 use multiversion::{inherit_target, multiversion};
 
-use super::leaf::{LANES, RayLeaf, groups_for, leaf_count};
+use super::leaf::{LANES, RayLeaf, TriGroup, groups_for, leaf_count};
 use super::triangle::{RayShear, TriangleHit};
 use super::wide_node::RayBoxes;
 use super::wide_packet::{PACKET, PacketHits};
@@ -77,25 +77,49 @@ impl RayLeaves<'_> {
         bound: &mut f32,
         mut hit: impl FnMut(usize, u32, &TriangleHit, &mut f32) -> bool,
     ) -> bool {
-        let (wide, ray) = (self.wide, self.ray);
         let (count, degenerate) = leaf_count(count);
-        for i in 0..groups_for(count) {
-            let g = &wide.leaves.groups[group + i];
-            // The bound only falls within the group, so the group's first bound lets
-            // through every lane a later, lower one accepts.
-            let candidates = self.pre.candidates(g, *bound);
-            // Padding lanes (NaN) never pass the prefilter: no mask by the count.
-            let mut lanes = candidates.mask;
-            while lanes != 0 {
-                let lane = lanes.trailing_zeros() as usize;
-                lanes &= lanes - 1;
-                let h = candidates.hit(lane, g, degenerate, &self.shear, ray.origin, *bound);
-                let Some(h) = h else {
-                    continue;
-                };
-                if hit((group + i) * LANES + lane, g.prim[lane % LANES], &h, bound) {
-                    return true;
-                }
+        let groups = &self.wide.leaves.groups[group..group + groups_for(count)];
+        // The first group apart from the others (of which most leaves have none): in a
+        // loop over all of them, LLVM hoisted the ray's constants out of it into
+        // registers it then spilled, and reloaded them from the stack in every leaf.
+        let Some((first, rest)) = groups.split_first() else {
+            return false;
+        };
+        if self.group_hits(group, first, degenerate, bound, &mut hit) {
+            return true;
+        }
+        for (i, g) in rest.iter().enumerate() {
+            if self.group_hits(group + 1 + i, g, degenerate, bound, &mut hit) {
+                return true;
+            }
+        }
+        false
+    }
+
+    /// [`Self::hits`] of group `g`, the group at `index` in the leaves.
+    #[inline(always)]
+    fn group_hits(
+        &self,
+        index: usize,
+        g: &TriGroup,
+        degenerate: bool,
+        bound: &mut f32,
+        hit: &mut impl FnMut(usize, u32, &TriangleHit, &mut f32) -> bool,
+    ) -> bool {
+        // The bound only falls within the group, so the group's first bound lets
+        // through every lane a later, lower one accepts.
+        let candidates = self.pre.candidates(g, *bound);
+        // Padding lanes (NaN) never pass the prefilter: no mask by the count.
+        let mut lanes = candidates.mask;
+        while lanes != 0 {
+            let lane = lanes.trailing_zeros() as usize;
+            lanes &= lanes - 1;
+            let h = candidates.hit(lane, g, degenerate, &self.shear, self.ray.origin, *bound);
+            let Some(h) = h else {
+                continue;
+            };
+            if hit(index * LANES + lane, g.prim[lane % LANES], &h, bound) {
+                return true;
             }
         }
         false
