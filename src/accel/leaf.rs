@@ -250,11 +250,15 @@ impl RayLeaf {
 
     /// The prefilter of group `g` with bound `t_max`: the lanes the scalar test may
     /// accept (bit `lane` is clear only when the scalar test rejects that
-    /// lane before its division) and the values that decide most of them without it.
+    /// lane before its division) and the values that decide most of them without it;
+    /// None when it rejects every lane (a third of the groups primary rays meet on the
+    /// torus, two thirds for incoherent ones), whose values are then neither stored
+    /// nor their sizes computed (torus 100k: 1,491 / 1,890 / 1,224 -> 1,464 / 1,821 /
+    /// 1,168 instructions per primary / incoherent / shadow ray).
     /// The same operations in the same order: `(p - origin)[k]` is `p[k] - origin[k]`;
     /// Rust never fuses a product and a sum. No branches, so the loop vectorises.
     #[inline(always)]
-    pub fn candidates(&self, g: &TriGroup, t_max: f32) -> Candidates {
+    pub fn candidates(&self, g: &TriGroup, t_max: f32) -> Option<Candidates> {
         // Local arrays, every lane written, gathered at the end: LLVM then drops their
         // zero initialisation, which it kept (six stores per group) in a struct
         // written field by field.
@@ -298,16 +302,21 @@ impl RayLeaf {
             [e[0][lane], e[1][lane], e[2][lane]] = [u, v, w];
             dets[lane] = det;
             t_scaleds[lane] = t_scaled;
+            // Only used when a lane passes: computed after that test (LLVM sinks it).
             [sizes[0][lane], sizes[1][lane], sizes[2][lane]] = sheared.sizes(self.sz.abs());
         }
-        Candidates {
-            mask: u32x4::from(bits).to_bitmask(),
+        let mask = u32x4::from(bits).to_bitmask();
+        if mask == 0 {
+            return None;
+        }
+        Some(Candidates {
+            mask,
             zero: u32x4::from(zeros).to_bitmask(),
             e,
             det: dets,
             t_scaled: t_scaleds,
             sizes,
-        }
+        })
     }
 
     /// Lane `lane` of `g` in ray space, as the scalar test computes it.

@@ -108,7 +108,9 @@ impl RayLeaves<'_> {
     ) -> bool {
         // The bound only falls within the group, so the group's first bound lets
         // through every lane a later, lower one accepts.
-        let candidates = self.pre.candidates(g, *bound);
+        let Some(candidates) = self.pre.candidates(g, *bound) else {
+            return false;
+        };
         // Padding lanes (NaN) never pass the prefilter: no mask by the count.
         let mut lanes = candidates.mask;
         while lanes != 0 {
