@@ -187,7 +187,7 @@ impl WideBvh {
             let (t, hit) = boxes.test(node, *t_max);
             let leaf_mask = leaf_lanes(node);
             let (mut leaves, inner) = (hit & leaf_mask, hit & !leaf_mask);
-            let next = if NEAREST_FIRST {
+            let mut next = if NEAREST_FIRST {
                 self.queue_nearest_first(node, &t, inner, &mut stack)
             } else {
                 // Any hit: the last interior child next, the others pushed. Its leaves
@@ -208,11 +208,19 @@ impl WideBvh {
                 }
                 next
             };
-            // `next` needs no entry distance check unless leaves are tested: its box was
-            // met just now within the same cull distance (entry <= min(exit, t_max) *
-            // BOX_MARGIN <= t_max * BOX_MARGIN, the product being monotonic).
-            let mut next_met = next.is_some();
             if leaves != 0 {
+                // `next` waits on the stack while the leaves are tested, popped after
+                // them with the others' entry distance check (the leaves may lower the
+                // cull distance below it): then no node index lives across the leaf
+                // tests' calls, which kept it on the call stack at every node. Without
+                // leaves it needs no check: its box was met just now within the same
+                // cull distance (entry <= min(exit, t_max) * BOX_MARGIN <= t_max *
+                // BOX_MARGIN, the product being monotonic). The stack still takes at
+                // most `WIDTH - 1` entries per level: a node with leaves has at most
+                // that many interior children.
+                if let Some(entry) = next.take() {
+                    stack.push(entry);
+                }
                 if NEAREST_FIRST {
                     // The leaves met load from memory together, while the first is
                     // tested: the first read of a leaf's group, a cache miss, was the
@@ -250,8 +258,6 @@ impl WideBvh {
                             return true;
                         }
                     }
-                    // The leaves may have lowered the cull distance below `next`'s entry.
-                    next_met = next.is_some_and(|(_, t_entry)| !beyond(t_entry, *t_max));
                 } else {
                     // Any hit: the cull distance stays.
                     while leaves != 0 {
@@ -265,8 +271,8 @@ impl WideBvh {
                 }
             }
             index = match next {
-                Some((child, _)) if next_met => child,
-                _ => match pop_node::<NEAREST_FIRST>(&mut stack, *t_max) {
+                Some((child, _)) => child,
+                None => match pop_node::<NEAREST_FIRST>(&mut stack, *t_max) {
                     Some(child) => child,
                     None => return false,
                 },
