@@ -300,11 +300,15 @@ impl WideBvh {
             return Some((node.child[lane], t[lane]));
         }
         if (inner & (inner - 1)).count_ones() == 1 {
-            // Two: one comparison.
-            let (a, b) = (inner.trailing_zeros(), 31 - inner.leading_zeros());
-            let (a, b) = (key(t[a as usize], a), key(t[b as usize], b));
-            let (near, far) = if a < b { (a, b) } else { (b, a) };
-            let (near, far) = (near as u32 as usize, far as u32 as usize);
+            // Two: one comparison, of the t bits alone, as the lanes are in order (the
+            // keys' order). Lanes `% WIDTH` (a no-op) to drop the bounds checks.
+            let a = inner.trailing_zeros() as usize % WIDTH;
+            let b = (31 - inner.leading_zeros()) as usize % WIDTH;
+            let (near, far) = if t[b].to_bits() < t[a].to_bits() {
+                (b, a)
+            } else {
+                (a, b)
+            };
             stack.push((node.child[far], t[far]));
             return Some((node.child[near], t[near]));
         }
