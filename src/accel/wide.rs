@@ -63,6 +63,28 @@ fn key(t: f32, lane: u32) -> u64 {
     ((t.to_bits() as u64) << 32) | lane as u64
 }
 
+/// Whether a box entered at `t_entry` lies beyond the cull distance `t_max`, with the
+/// slab test's margin: a box entry rounded just past a hit on its face must not hide a
+/// tie there, or the hit found would depend on the visiting order.
+#[inline(always)]
+fn beyond(t_entry: f32, t_max: f32) -> bool {
+    t_entry > t_max * BOX_MARGIN
+}
+
+/// Pops the node of the top entry, skipping (with `CULL`) entries whose box lies
+/// `beyond` `t_max`: pushed earlier, it may now lie beyond the closest hit found
+/// since. None when the stack runs out.
+#[inline(always)]
+fn pop_node<const CULL: bool>(stack: &mut Stack, t_max: f32) -> Option<u32> {
+    while let Some((index, t_entry)) = stack.pop() {
+        if CULL && beyond(t_entry, t_max) {
+            continue;
+        }
+        return Some(index);
+    }
+    None
+}
+
 impl WideBvh {
     /// Collapses `bvh` (built over `positions`) into `WIDTH`-wide nodes, each taking the
     /// cut of its binary subtree of least surface-area cost, each leaf a binary subtree
@@ -170,35 +192,54 @@ impl WideBvh {
             return false;
         }
         let mut stack = Stack::new();
-        // The node to visit next without a round trip through the stack: a node's
-        // nearest interior child (any-hit: its last, which would be popped first).
-        let mut next = Some((0, 0.0));
+        // The node to visit: the root, then a node's nearest interior child (any-hit:
+        // its last, which would be popped first) without a round trip through the
+        // stack, else the top of the stack.
+        let mut index = 0;
         // Lane indices below are taken `% WIDTH` (a no-op: masks have WIDTH bits) so
         // that the compiler drops the bounds checks on the node's lane arrays: 1,528 /
         // 1,914 -> 1,515 / 1,898 instructions per primary / incoherent ray (torus 100k).
         // The same in `queue_nearest_first` cost 1,542 / 1,938 (code layout), so not there.
         loop {
-            // Nodes until one meets leaves: only box tests and the stack in this inner
-            // loop, so that the per-ray constants of the box test can stay in registers
-            // through it, reloaded (if the leaf test below needs the registers) once per
-            // node with leaves, not once per node.
-            let (node, t, mut leaves) = loop {
-                let Some((index, t_entry)) = next.take().or_else(|| stack.pop()) else {
-                    return false;
-                };
-                // A box pushed earlier may now lie beyond the closest hit found since.
-                // With the slab test's margin: a box entry rounded just past a hit on its
-                // face must not hide a tie there, or the hit found would depend on the
-                // visiting order.
-                if t_entry > *t_max * BOX_MARGIN {
-                    continue;
+            let node = &self.nodes[index as usize];
+            let (t, hit) = boxes.test(node, *t_max);
+            let leaf_mask = leaf_lanes(node);
+            let (mut leaves, inner) = (hit & leaf_mask, hit & !leaf_mask);
+            let mut next = if NEAREST_FIRST {
+                self.queue_nearest_first(node, &t, inner, &mut stack)
+            } else {
+                // Any hit: the last interior child next, the others pushed. Its leaves
+                // are tested below before either. No entry distance: the cull distance
+                // of any-hit queries never falls, so no box met is culled later (a zero,
+                // not `t[lane]`, spares the store of `t`).
+                let mut inner = inner;
+                let mut next = None;
+                while inner != 0 {
+                    let lane = inner.trailing_zeros() as usize % WIDTH;
+                    inner &= inner - 1;
+                    let entry = (node.child[lane], 0.0);
+                    if inner == 0 {
+                        next = Some(entry);
+                    } else {
+                        stack.push(entry);
+                    }
                 }
-                let node = &self.nodes[index as usize];
-                let (t, hit) = boxes.test(node, *t_max);
-                let leaf_mask = leaf_lanes(node);
-                let (leaves, inner) = (hit & leaf_mask, hit & !leaf_mask);
+                next
+            };
+            if leaves != 0 {
+                // `next` waits on the stack while the leaves are tested, popped after
+                // them with the others' entry distance check (the leaves may lower the
+                // cull distance below it): then no node index lives across the leaf
+                // tests' calls, which kept it on the call stack at every node. Without
+                // leaves it needs no check: its box was met just now within the same
+                // cull distance (entry <= min(exit, t_max) * BOX_MARGIN <= t_max *
+                // BOX_MARGIN, the product being monotonic). The stack still takes at
+                // most `WIDTH - 1` entries per level: a node with leaves has at most
+                // that many interior children.
+                if let Some(entry) = next.take() {
+                    stack.push(entry);
+                }
                 if NEAREST_FIRST {
-                    next = self.queue_nearest_first(node, &t, inner, &mut stack);
                     // The leaves met load from memory together, while the first is
                     // tested: the first read of a leaf's group, a cache miss, was the
                     // leaf test's largest stall in perf (a quarter of its time).
@@ -212,57 +253,48 @@ impl WideBvh {
                         met &= met - 1;
                         visitor.prefetch(groups.wrapping_add(node.child[lane] as usize));
                     }
-                } else {
-                    // Any hit: the last interior child next, the others pushed. Its
-                    // leaves are tested below before either.
-                    let mut inner = inner;
-                    while inner != 0 {
-                        let lane = inner.trailing_zeros() as usize % WIDTH;
-                        inner &= inner - 1;
-                        let entry = (node.child[lane], t[lane]);
-                        if inner == 0 {
-                            next = Some(entry);
+                    // Leaves nearest first, after the interior children are queued.
+                    while leaves != 0 {
+                        let lane = if leaves & (leaves - 1) == 0 {
+                            leaves.trailing_zeros()
                         } else {
-                            stack.push(entry);
+                            let mut rest = leaves;
+                            let mut best = u64::MAX;
+                            while rest != 0 {
+                                let lane = rest.trailing_zeros();
+                                rest &= rest - 1;
+                                best = best.min(key(t[lane as usize % WIDTH], lane));
+                            }
+                            best as u32
+                        };
+                        leaves &= !(1 << lane);
+                        let lane = lane as usize % WIDTH;
+                        let (child, count) = (node.child[lane], node.count[lane]);
+                        if t[lane] <= *t_max * BOX_MARGIN
+                            && visitor.leaf(child as usize, count, t_max)
+                        {
+                            return true;
+                        }
+                    }
+                } else {
+                    // Any hit: the cull distance stays.
+                    while leaves != 0 {
+                        let lane = leaves.trailing_zeros() as usize % WIDTH;
+                        leaves &= leaves - 1;
+                        let (child, count) = (node.child[lane], node.count[lane]);
+                        if visitor.leaf(child as usize, count, t_max) {
+                            return true;
                         }
                     }
                 }
-                if leaves != 0 {
-                    break (node, t, leaves);
-                }
+            }
+            index = match next {
+                Some((child, _)) => child,
+                None => match pop_node::<NEAREST_FIRST>(&mut stack, *t_max) {
+                    Some(child) => child,
+                    None => return false,
+                },
             };
-            if !NEAREST_FIRST {
-                while leaves != 0 {
-                    let lane = leaves.trailing_zeros() as usize % WIDTH;
-                    leaves &= leaves - 1;
-                    let (child, count) = (node.child[lane], node.count[lane]);
-                    if visitor.leaf(child as usize, count, t_max) {
-                        return true;
-                    }
-                }
-                continue;
-            }
-            // Leaves nearest first, after the interior children are queued.
-            while leaves != 0 {
-                let lane = if leaves & (leaves - 1) == 0 {
-                    leaves.trailing_zeros()
-                } else {
-                    let mut rest = leaves;
-                    let mut best = u64::MAX;
-                    while rest != 0 {
-                        let lane = rest.trailing_zeros();
-                        rest &= rest - 1;
-                        best = best.min(key(t[lane as usize % WIDTH], lane));
-                    }
-                    best as u32
-                };
-                leaves &= !(1 << lane);
-                let lane = lane as usize % WIDTH;
-                let (child, count) = (node.child[lane], node.count[lane]);
-                if t[lane] <= *t_max * BOX_MARGIN && visitor.leaf(child as usize, count, t_max) {
-                    return true;
-                }
-            }
         }
     }
 
@@ -286,11 +318,15 @@ impl WideBvh {
             return Some((node.child[lane], t[lane]));
         }
         if (inner & (inner - 1)).count_ones() == 1 {
-            // Two: one comparison.
-            let (a, b) = (inner.trailing_zeros(), 31 - inner.leading_zeros());
-            let (a, b) = (key(t[a as usize], a), key(t[b as usize], b));
-            let (near, far) = if a < b { (a, b) } else { (b, a) };
-            let (near, far) = (near as u32 as usize, far as u32 as usize);
+            // Two: one comparison, of the t bits alone, as the lanes are in order (the
+            // keys' order). Lanes `% WIDTH` (a no-op) to drop the bounds checks.
+            let a = inner.trailing_zeros() as usize % WIDTH;
+            let b = (31 - inner.leading_zeros()) as usize % WIDTH;
+            let (near, far) = if t[b].to_bits() < t[a].to_bits() {
+                (b, a)
+            } else {
+                (a, b)
+            };
             stack.push((node.child[far], t[far]));
             return Some((node.child[near], t[near]));
         }

@@ -533,6 +533,81 @@ fn degenerate_triangles_are_flagged_and_never_hit() {
     assert!(bad.validate(&tris).is_err());
 }
 
+/// Records the x range of each leaf the traversal visits and lowers the cull distance
+/// to the leaf's nearest square on a ray along x from `origin_x` (squares across x).
+struct NearestSquare<'a> {
+    wide: &'a WideBvh,
+    origin_x: f32,
+    visited: Vec<(f32, f32)>,
+}
+
+impl LeafVisitor for NearestSquare<'_> {
+    fn leaf(&mut self, group: usize, count: u32, t_max: &mut f32) -> bool {
+        let (count, _) = crate::accel::leaf::leaf_count(count);
+        let (mut lo, mut hi) = (f32::INFINITY, f32::NEG_INFINITY);
+        for g in group..group + groups_for(count) {
+            for lane in 0..LANES {
+                if self.wide.leaves.groups[g].prim[lane] != NO_PRIM {
+                    let x = self.wide.leaves.groups[g].triangle(lane)[0].x;
+                    (lo, hi) = (lo.min(x), hi.max(x));
+                    *t_max = t_max.min((x - self.origin_x).abs());
+                }
+            }
+        }
+        self.visited.push((lo, hi));
+        false
+    }
+}
+
+/// The closest-hit traversal visits nodes nearest first and culls what lies beyond the
+/// hits found: on rays along x through rows of clusters of squares across x, far apart
+/// (so that the ray meets two and more interior children of a node), every leaf it
+/// visits lies in the nearest cluster, from either side.
+#[test]
+fn closest_hit_traversal_visits_the_nearest_cluster_alone() {
+    for (rows, columns) in [(4, 2), (2, 3), (1, 2), (1, 5)] {
+        // 150 squares per cluster, 1 apart; clusters 1,000 apart in x and in y.
+        let tris: Vec<Tri> = (0..rows * columns * 150)
+            .flat_map(|i| {
+                let (cluster, k) = (i / 150, i % 150);
+                let x = (cluster % columns * 1000 + k) as f32;
+                let y = (cluster / columns * 1000) as f32;
+                let p = |dy: f32, z: f32| vec3(x, y + dy, z);
+                [
+                    [p(-1.0, -1.0), p(1.0, -1.0), p(1.0, 1.0)],
+                    [p(-1.0, -1.0), p(1.0, 1.0), p(-1.0, 1.0)],
+                ]
+            })
+            .collect();
+        let (_, wide) = both(&tris, SplitMethod::SahBinned);
+        let last = ((columns - 1) * 1000 + 149) as f32;
+        for row in 0..rows {
+            let y = (row * 1000) as f32 + 0.1;
+            let sides = [
+                (-1.0, 1.0, 0.0..=149.0),
+                (last + 1.0, -1.0, last - 149.0..=last),
+            ];
+            for (origin_x, dir, near) in sides {
+                let ray = Ray::new(vec3(origin_x, y, 0.2), vec3(dir, 0.0, 0.0));
+                let mut visitor = NearestSquare {
+                    wide: &wide,
+                    origin_x,
+                    visited: Vec::new(),
+                };
+                let mut t_max = f32::INFINITY;
+                wide.traverse::<true>(&RayBoxes::new(&ray), &mut t_max, &mut visitor);
+                assert_eq!(t_max, 1.0, "{rows}x{columns} clusters, {ray:?}");
+                for &(lo, hi) in &visitor.visited {
+                    assert!(
+                        near.contains(&lo) && near.contains(&hi),
+                        "{rows}x{columns} clusters, {ray:?}: a leaf over x {lo}..{hi}"
+                    );
+                }
+            }
+        }
+    }
+}
+
 #[path = "wide_collapse_tests.rs"]
 mod collapse;
 
