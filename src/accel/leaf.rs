@@ -463,31 +463,33 @@ impl Candidates {
         lane: usize,
         g: &TriGroup,
         may_be_degenerate: bool,
-        shear: &RayShear,
-        origin: Vec3,
+        ray: &Ray,
         t_max: f32,
     ) -> Option<TriangleHit> {
         match self.decide(lane, t_max, may_be_degenerate, || g.triangle(lane)) {
             Decided::Hit(h) => Some(h),
             Decided::Miss => None,
-            Decided::Scalar => scalar_lane(g, lane, shear, origin, t_max, may_be_degenerate),
+            Decided::Scalar => scalar_lane(g, lane, ray, t_max, may_be_degenerate),
         }
     }
 }
 
 /// The scalar test on lane `lane` of `g`, for the few lanes whose values do not decide
-/// it: out of line and cold, so that the hot path builds nothing for it.
+/// it: out of line and cold, so that the hot path builds nothing for it. It makes the
+/// ray's `RayShear` itself (the prefilter's shear to the bit: `RayShear::with_inverse`
+/// is `RayShear::new`), so that a query stores only the prefilter's constants per ray,
+/// not a second copy of the shear for this rare path.
 #[cold]
 #[inline(never)]
 fn scalar_lane(
     g: &TriGroup,
     lane: usize,
-    shear: &RayShear,
-    origin: Vec3,
+    ray: &Ray,
     t_max: f32,
     may_be_degenerate: bool,
 ) -> Option<TriangleHit> {
-    intersect_triangle_flagged(shear, origin, g.triangle(lane), t_max, may_be_degenerate)
+    let shear = RayShear::new(ray);
+    intersect_triangle_flagged(&shear, ray.origin, g.triangle(lane), t_max, may_be_degenerate)
 }
 
 /// True when `t` exceeds three times the scalar test's bound on its rounding error

@@ -20,7 +20,7 @@ fn leaf_hits(ray: &Ray, g: &TriGroup, t_max: f32) -> ([Option<TriangleHit>; LANE
     });
     let hits = std::array::from_fn(|lane| {
         (mask & (1 << lane) != 0)
-            .then(|| candidates.hit(lane, g, degenerate, &s, ray.origin, t_max))
+            .then(|| candidates.hit(lane, g, degenerate, ray, t_max))
             .flatten()
     });
     (hits, mask)

@@ -56,7 +56,7 @@ fn each_line<T>(item: *const T, line: impl Fn(*const u8)) {
 struct RayLeaves<'a> {
     wide: &'a WideBvh,
     ray: &'a Ray,
-    shear: RayShear,
+    /// The prefilter's constants; the rare scalar test makes its `RayShear` from `ray`.
     pre: RayLeaf,
 }
 
@@ -125,7 +125,7 @@ impl RayLeaves<'_> {
         while lanes != 0 {
             let lane = lanes.trailing_zeros() as usize;
             lanes &= lanes - 1;
-            let h = candidates.hit(lane, g, degenerate, &self.shear, self.ray.origin, *bound);
+            let h = candidates.hit(lane, g, degenerate, self.ray, *bound);
             let Some(h) = h else {
                 continue;
             };
@@ -366,14 +366,8 @@ impl WideBvh {
 impl<'a> RayLeaves<'a> {
     #[inline(always)]
     fn new(wide: &'a WideBvh, ray: &'a Ray, inv: [f32; 3]) -> RayLeaves<'a> {
-        let shear = RayShear::with_inverse(ray, inv);
-        let pre = RayLeaf::new(ray, &shear);
-        RayLeaves {
-            wide,
-            ray,
-            shear,
-            pre,
-        }
+        let pre = RayLeaf::new(ray, &RayShear::with_inverse(ray, inv));
+        RayLeaves { wide, ray, pre }
     }
 }
 
