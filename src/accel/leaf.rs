@@ -233,7 +233,8 @@ impl RayLeaf {
     /// The prefilter's constants for `ray` sheared by `s` (`RayShear::new(ray)`).
     #[inline(always)]
     pub fn new(ray: &Ray, s: &RayShear) -> RayLeaf {
-        let o = ray.origin.to_array();
+        // The origin in place, indexed without a copy of it on the stack.
+        let o: &[f32; 3] = ray.origin.as_ref();
         RayLeaf {
             axes: [s.kx, s.ky, s.kz],
             origin: [o[s.kx], o[s.ky], o[s.kz]],
@@ -489,7 +490,13 @@ fn scalar_lane(
     may_be_degenerate: bool,
 ) -> Option<TriangleHit> {
     let shear = RayShear::new(ray);
-    intersect_triangle_flagged(&shear, ray.origin, g.triangle(lane), t_max, may_be_degenerate)
+    intersect_triangle_flagged(
+        &shear,
+        ray.origin,
+        g.triangle(lane),
+        t_max,
+        may_be_degenerate,
+    )
 }
 
 /// True when `t` exceeds three times the scalar test's bound on its rounding error

@@ -69,16 +69,16 @@ impl RayShear {
         } else {
             2
         };
-        let mut kx = (kz + 1) % 3;
-        let mut ky = (kx + 1) % 3;
-        // Swapping keeps the winding (sign of the edge functions) consistent
-        // with the original orientation when looking down -z.
-        // An array indexes without glam's per-component `match` (a chain of branches).
-        let d = ray.dir.to_array();
-        if d[kz] < 0.0 {
-            std::mem::swap(&mut kx, &mut ky);
-        }
+        // The direction in place (the ray's memory), indexed without glam's
+        // per-component `match` (a chain of branches) and without a copy of it on the
+        // stack to index.
+        let d: &[f32; 3] = ray.dir.as_ref();
         let dz = d[kz];
+        // x and y follow z cyclically, swapped when dir[kz] is negative so that the
+        // winding (sign of the edge functions) stays consistent with the original
+        // orientation when looking down -z: a table of the six cases, where `(kz + 1) %
+        // 3` and the swap were a chain of compares and conditional moves.
+        let [kx, ky] = AXES[kz][(dz < 0.0) as usize];
         RayShear {
             kx,
             ky,
@@ -90,6 +90,10 @@ impl RayShear {
         }
     }
 }
+
+/// `[kx, ky]` of `RayShear` for the dominant axis `kz`: `[kz][0]` the next two axes
+/// cyclically, `[kz][1]` (a negative `dir[kz]`) the same swapped.
+const AXES: [[[usize; 2]; 2]; 3] = [[[1, 2], [2, 1]], [[2, 0], [0, 2]], [[0, 1], [1, 0]]];
 
 /// Watertight ray/triangle test; hits both windings with `t` in (0, t_max).
 pub fn intersect_triangle(
@@ -516,6 +520,24 @@ mod tests {
                 assert!(h.b0 >= 0.0 && h.b1 >= 0.0 && h.b2 >= 0.0);
                 assert!((h.b0 + h.b1 + h.b2 - 1.0).abs() < 1e-4);
                 assert!((h.t - 1.0).abs() < 1e-3, "t {}", h.t);
+            }
+        }
+    }
+
+    /// `AXES` names the two axes after the dominant one in cyclic order, swapped when
+    /// the dominant component is negative, and `RayShear::new` picks them so (the
+    /// winding every triangle test relies on).
+    #[test]
+    fn axes_follow_the_dominant_axis_cyclically_swapped_when_negative() {
+        for kz in 0..3 {
+            let (kx, ky) = ((kz + 1) % 3, (kz + 2) % 3);
+            assert_eq!(AXES[kz], [[kx, ky], [ky, kx]], "{kz}");
+            for sign in [1.0, -1.0] {
+                let mut dir = Vec3::splat(0.25);
+                dir[kz] = sign;
+                let s = RayShear::new(&Ray::new(Vec3::ZERO, dir));
+                let want = if sign < 0.0 { (ky, kx) } else { (kx, ky) };
+                assert_eq!((s.kx, s.ky, s.kz), (want.0, want.1, kz), "{dir}");
             }
         }
     }

@@ -82,7 +82,12 @@ impl RayBoxes {
     /// glam's per-component `match`, a chain of branches).
     #[inline(always)]
     pub(super) fn with_inverse(ray: &Ray, inv: [f32; 3]) -> RayBoxes {
-        let neg = |a: usize| inv[a].is_sign_negative() as usize;
+        // The sign of `inv[a]` is that of `dir[a]` (of a zero too: 1 / -0 is -inf),
+        // taken from the direction so that the rows the first box test loads do not
+        // wait for the division. (A NaN component makes that axis's distances NaN,
+        // which the box test ignores in either row.)
+        let d = ray.dir.to_array();
+        let neg = |a: usize| d[a].is_sign_negative() as usize;
         RayBoxes {
             origin: ray.origin.to_array(),
             neg_inv: inv.map(|i| -i),
