@@ -492,6 +492,23 @@ mod tests {
     }
 
     #[test]
+    fn build_is_the_same_whichever_backing_its_arrays_have() {
+        use crate::accel::build::build_backed;
+        use crate::accel::huge::Backing;
+        // 70k primitives fill their `PrimRef`s in parallel (and take a mapping with
+        // `Auto`); 500 fill them in order.
+        for n in [70_000, 500] {
+            let bounds = random_tri_bounds(n, 7);
+            let want = Bvh::build(&bounds, SplitMethod::SahBinned);
+            for backing in [Backing::Heap, Backing::Mapped] {
+                let b = build_backed(&bounds, SplitMethod::SahBinned, backing);
+                assert_eq!(b.nodes, want.nodes, "{n} prims, {backing:?}");
+                assert_eq!(b.prim_indices, want.prim_indices, "{n} prims, {backing:?}");
+            }
+        }
+    }
+
+    #[test]
     fn nan_coordinates_do_not_shrink_boxes() {
         // A NaN coordinate is ignored wherever it comes in the order, so the
         // finite boxes around it stay covered.

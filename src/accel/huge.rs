@@ -127,6 +127,21 @@ impl<T: Pod> HugeVec<T> {
         HugeVec { store, backing }
     }
 
+    /// `len` zeroed elements, kept as `backing` says: a fresh mapping is zeroed already,
+    /// and a `Vec` comes zeroed from the allocator, so neither takes a pass writing
+    /// zeros (the pages are zeroed as they are first touched).
+    pub fn zeroed(len: usize, backing: Backing) -> HugeVec<T> {
+        let mapped = Self::wants_mapping(len, backing).then(|| Mapped::new(len));
+        let store = match mapped {
+            Some(Some(mut m)) => {
+                m.len = len;
+                Store::Mapped(m)
+            }
+            _ => Store::Heap(bytemuck::zeroed_vec(len)),
+        };
+        HugeVec { store, backing }
+    }
+
     /// The elements of `items`, kept as `backing` says.
     pub fn from_slice(items: &[T], backing: Backing) -> HugeVec<T> {
         let mut v = HugeVec::with_backing(items.len(), backing);
