@@ -1,6 +1,7 @@
-//! [`HugeVec`]: a growable array for the BVH's large, long-lived arrays (the wide
-//! nodes and leaf groups), kept in memory that the OS may back with transparent huge
-//! pages.
+//! [`HugeVec`]: a growable array for the BVH's large arrays (the wide nodes and leaf
+//! groups, the binary tree's nodes and primitive order, and the build's and the
+//! collapse's working arrays), kept in memory that the OS may back with transparent
+//! huge pages.
 //!
 //! Why: an incoherent ray's node and leaf loads land all over a BVH of tens of
 //! megabytes, and with 4 KiB pages most of them also miss the TLB. Linux backs
