@@ -22,6 +22,7 @@ use wide::f32x4;
 
 use super::Aabb;
 use super::bvh::{Bvh, BvhNode, SplitMethod};
+use super::huge::{Backing, HugeVec};
 use super::leaf::LANES;
 
 mod bins;
@@ -136,7 +137,7 @@ const INDEX_TAG: u32 = 1 << 30;
 /// partitions; each corner loads as one [`Lanes`]. The upper corner is kept
 /// negated, the bins' form (see [`PrimRef::flipped`]); the unused fourth lane of
 /// `neg_hi` holds the index's bits, tagged (see [`INDEX_TAG`]).
-#[derive(Clone, Copy)]
+#[derive(Clone, Copy, bytemuck::Pod, bytemuck::Zeroable)]
 #[repr(C, align(16))]
 struct PrimRef {
     lo: Lanes,
@@ -247,42 +248,56 @@ impl Bvh {
 }
 
 fn build(bounds: &[Aabb], split: SplitMethod) -> Bvh {
+    build_backed(bounds, split, Backing::Auto)
+}
+
+/// [`build`] with the `PrimRef`s and the tree's arrays kept as `backing` says: from
+/// 2 MiB on (65k `PrimRef`s) a huge-page mapping with `Auto`, where a `Vec` took a page
+/// fault per 4 KiB (8k for the `PrimRef`s at 1M triangles); tests force either backing,
+/// which must give the same tree.
+pub(super) fn build_backed(bounds: &[Aabb], split: SplitMethod, backing: Backing) -> Bvh {
     if bounds.is_empty() {
         return Bvh::default();
     }
-    let make = |(i, b): (usize, &Aabb)| PrimRef::new(i, b);
-    let mut refs: Vec<PrimRef> = if bounds.len() >= 2 * PARALLEL_BIN_CHUNK {
-        bounds.par_iter().enumerate().map(make).collect()
+    let mut refs = HugeVec::<PrimRef>::zeroed(bounds.len(), backing);
+    let make = |(i, (r, b)): (usize, (&mut PrimRef, &Aabb))| *r = PrimRef::new(i, b);
+    if bounds.len() >= 2 * PARALLEL_BIN_CHUNK {
+        refs.par_iter_mut().zip(bounds).enumerate().for_each(make);
     } else {
-        bounds.iter().enumerate().map(make).collect()
-    };
+        refs.iter_mut().zip(bounds).enumerate().for_each(make);
+    }
     let root = NodeBounds::of(&refs);
     let (pieces, count) = build_subtree(split, &mut refs, 0, 1, root);
-    let prim_indices: Vec<u32> = refs.iter().map(PrimRef::index).collect();
+    let mut prim_indices = HugeVec::zeroed(refs.len(), backing);
+    for (p, r) in prim_indices.iter_mut().zip(refs.iter()) {
+        *p = r.index();
+    }
     drop(refs);
     Bvh {
-        nodes: assemble(pieces, count),
+        nodes: assemble(pieces, count, backing),
         prim_indices,
     }
 }
 
-/// Concatenates the pieces, moving each one's child offsets to where it lands.
-fn assemble(mut pieces: Vec<Piece>, count: u32) -> Vec<BvhNode> {
+/// Concatenates the pieces, moving each one's child offsets to where they land, into
+/// an array kept as `backing` says (like the `PrimRef`s: 17 MB of nodes at 1M).
+fn assemble(mut pieces: Vec<Piece>, count: u32, backing: Backing) -> HugeVec<BvhNode> {
     if pieces.len() == 1 {
-        let mut nodes = pieces.pop().unwrap().nodes;
-        nodes.shrink_to_fit();
-        return nodes;
+        let nodes = pieces.pop().unwrap().nodes;
+        return HugeVec::from_slice(&nodes, backing);
     }
-    let mut nodes = Vec::with_capacity(count as usize);
+    let mut nodes = HugeVec::zeroed(count as usize, backing);
+    let all = nodes.as_mut_slice();
+    let mut next = 0;
     for p in pieces {
-        debug_assert_eq!(p.shift as usize, nodes.len());
-        nodes.extend(p.nodes.iter().map(|n| {
-            let mut n = *n;
+        debug_assert_eq!(p.shift as usize, next);
+        next += p.nodes.len();
+        for (out, n) in all[p.shift as usize..next].iter_mut().zip(&p.nodes) {
+            *out = *n;
             if !n.is_leaf() {
-                n.offset += p.shift;
+                out.offset += p.shift;
             }
-            n
-        }));
+        }
     }
     nodes
 }

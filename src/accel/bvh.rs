@@ -7,6 +7,7 @@
 use glam::Vec3;
 
 use super::Aabb;
+use super::huge::HugeVec;
 
 /// How the builder chooses split planes.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
@@ -19,7 +20,7 @@ pub enum SplitMethod {
 }
 
 /// 32-byte node, depth-first: an interior node's first child is at index+1, its second at `offset`; a leaf holds prim_indices[offset..offset+count].
-#[derive(Clone, Copy, Debug, PartialEq)]
+#[derive(Clone, Copy, Debug, PartialEq, bytemuck::Pod, bytemuck::Zeroable)]
 #[repr(C)]
 pub struct BvhNode {
     /// Box minimum corner.
@@ -72,10 +73,11 @@ impl BvhNode {
 /// A BVH: depth-first nodes (root at 0) and the primitive order the leaves refer to.
 #[derive(Clone, Debug, Default)]
 pub struct Bvh {
-    /// Nodes in depth-first order; empty for no primitives.
-    pub nodes: Vec<BvhNode>,
+    /// Nodes in depth-first order; empty for no primitives. A [`HugeVec`]: in a
+    /// huge-page mapping when large, as the build leaves it (see `build.rs`).
+    pub nodes: HugeVec<BvhNode>,
     /// Primitive indices (into the builder's `bounds`), grouped by leaf.
-    pub prim_indices: Vec<u32>,
+    pub prim_indices: HugeVec<u32>,
 }
 
 /// Deepest tree the fixed traversal stack supports (the builder stays within it).
@@ -90,8 +92,8 @@ impl Bvh {
         }
         let b = bounds.iter().fold(Aabb::EMPTY, |acc, b| acc.union(*b));
         Bvh {
-            nodes: vec![BvhNode::leaf(b, 0, bounds.len() as u32)],
-            prim_indices: (0..bounds.len() as u32).collect(),
+            nodes: vec![BvhNode::leaf(b, 0, bounds.len() as u32)].into(),
+            prim_indices: (0..bounds.len() as u32).collect::<Vec<u32>>().into(),
         }
     }
 
@@ -487,6 +489,23 @@ mod tests {
                     "{} prims, {threads} threads",
                     bounds.len()
                 );
+            }
+        }
+    }
+
+    #[test]
+    fn build_is_the_same_whichever_backing_its_arrays_have() {
+        use crate::accel::build::build_backed;
+        use crate::accel::huge::Backing;
+        // 70k primitives fill their `PrimRef`s in parallel (and take a mapping with
+        // `Auto`); 500 fill them in order.
+        for n in [70_000, 500] {
+            let bounds = random_tri_bounds(n, 7);
+            let want = Bvh::build(&bounds, SplitMethod::SahBinned);
+            for backing in [Backing::Heap, Backing::Mapped] {
+                let b = build_backed(&bounds, SplitMethod::SahBinned, backing);
+                assert_eq!(b.nodes, want.nodes, "{n} prims, {backing:?}");
+                assert_eq!(b.prim_indices, want.prim_indices, "{n} prims, {backing:?}");
             }
         }
     }

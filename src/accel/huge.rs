@@ -1,6 +1,7 @@
-//! [`HugeVec`]: a growable array for the BVH's large, long-lived arrays (the wide
-//! nodes and leaf groups), kept in memory that the OS may back with transparent huge
-//! pages.
+//! [`HugeVec`]: a growable array for the BVH's large arrays (the wide nodes and leaf
+//! groups, the binary tree's nodes and primitive order, and the build's and the
+//! collapse's working arrays), kept in memory that the OS may back with transparent
+//! huge pages.
 //!
 //! Why: an incoherent ray's node and leaf loads land all over a BVH of tens of
 //! megabytes, and with 4 KiB pages most of them also miss the TLB. Linux backs
@@ -123,6 +124,21 @@ impl<T: Pod> HugeVec<T> {
         let store = match Self::wants_mapping(cap, backing).then(|| Mapped::new(cap)) {
             Some(Some(mapped)) => Store::Mapped(mapped),
             _ => Store::Heap(Vec::with_capacity(cap)),
+        };
+        HugeVec { store, backing }
+    }
+
+    /// `len` zeroed elements, kept as `backing` says: a fresh mapping is zeroed already,
+    /// and a `Vec` comes zeroed from the allocator, so neither takes a pass writing
+    /// zeros (the pages are zeroed as they are first touched).
+    pub fn zeroed(len: usize, backing: Backing) -> HugeVec<T> {
+        let mapped = Self::wants_mapping(len, backing).then(|| Mapped::new(len));
+        let store = match mapped {
+            Some(Some(mut m)) => {
+                m.len = len;
+                Store::Mapped(m)
+            }
+            _ => Store::Heap(bytemuck::zeroed_vec(len)),
         };
         HugeVec { store, backing }
     }

@@ -103,6 +103,27 @@ fn large_arrays_are_mapped_on_a_huge_page_boundary_and_small_ones_are_not() {
 }
 
 #[test]
+fn zeroed_arrays_hold_zeros_and_take_their_backing() {
+    let zero = Item {
+        a: [0; 4],
+        b: [0.0; 8],
+    };
+    for n in [0, 1, 1000, count_for(MIN_MAPPED_BYTES)] {
+        for backing in [Backing::Auto, Backing::Heap, Backing::Mapped] {
+            let mut v = HugeVec::<Item>::zeroed(n, backing);
+            assert_eq!(v.len(), n, "{n} items, {backing:?}");
+            assert!(v.iter().all(|x| *x == zero), "{n} items, {backing:?}");
+            let mapped = backing == Backing::Mapped
+                || (backing == Backing::Auto && n * size_of::<Item>() >= MIN_MAPPED_BYTES);
+            assert_eq!(v.is_mapped(), mapped, "{n} items, {backing:?}");
+            // Still growable like any other.
+            v.push(item(n));
+            assert_eq!(v[n], item(n));
+        }
+    }
+}
+
+#[test]
 fn a_vec_converts_by_its_size() {
     let small: HugeVec<Item> = (0..100).map(item).collect::<Vec<_>>().into();
     assert!(!small.is_mapped());

@@ -15,7 +15,8 @@
 //! - `wide_packet`: the queries for packets of up to eight rays, one ray per SIMD lane.
 //! - `ray_lanes`: a packet's rays side by side ([`RayLanes`]), as those queries read them,
 //!   and their closest hits ([`HitLanes`]), as the closest-hit query keeps them.
-//! - [`huge`]: `HugeVec`, the wide BVH's arrays in huge-page-advised memory when large.
+//! - [`huge`]: `HugeVec`, the BVHs' and their builds' arrays in huge-page-advised memory
+//!   when large.
 //! - [`leaf`]: the wide BVH's leaf triangles in SIMD groups, with a vectorised prefilter.
 //! - [`instance`]: a two-level BVH, one wide BVH per mesh shared by its instances.
 

@@ -55,7 +55,9 @@ impl Bvh {
         visitor: &mut impl TraversalVisitor,
         mut hit: impl FnMut(u32, f32) -> Option<f32>,
     ) -> Option<(u32, f32)> {
-        let root = self.nodes.first()?;
+        // Plain slices: each of a `HugeVec`'s accesses would look at its backing.
+        let (nodes, prims) = (self.nodes.as_slice(), self.prim_indices.as_slice());
+        let root = nodes.first()?;
         let inv_dir = ray.dir.recip();
         let origin = ray.origin;
         let mut best_t = t_max;
@@ -74,10 +76,10 @@ impl Bvh {
             // hit on its face must not hide a tie there.
             if cur.t_entry <= best_t * BOX_MARGIN {
                 visitor.visit_node(cur.node, cur.depth);
-                let node = &self.nodes[cur.node as usize];
+                let node = &nodes[cur.node as usize];
                 if node.is_leaf() {
                     for k in node.offset..node.offset + node.count {
-                        let prim = self.prim_indices[k as usize];
+                        let prim = prims[k as usize];
                         visitor.test_prim(prim);
                         // A few ulps past the best t so far (the rounding of the
                         // triangle test's scaled early-out), so every primitive at the
@@ -99,10 +101,10 @@ impl Bvh {
                     }
                 } else {
                     let (a, b) = (cur.node + 1, node.offset);
-                    let ta = self.nodes[a as usize]
+                    let ta = nodes[a as usize]
                         .bounds()
                         .intersect_ray(origin, inv_dir, best_t);
-                    let tb = self.nodes[b as usize]
+                    let tb = nodes[b as usize]
                         .bounds()
                         .intersect_ray(origin, inv_dir, best_t);
                     let depth = cur.depth + 1;
@@ -153,7 +155,8 @@ impl Bvh {
         visitor: &mut impl TraversalVisitor,
         mut visit: impl FnMut(u32) -> bool,
     ) -> bool {
-        let Some(root) = self.nodes.first() else {
+        let (nodes, prims) = (self.nodes.as_slice(), self.prim_indices.as_slice());
+        let Some(root) = nodes.first() else {
             return false;
         };
         let inv_dir = ray.dir.recip();
@@ -174,10 +177,10 @@ impl Bvh {
         loop {
             let (i, depth) = cur;
             visitor.visit_node(i, depth);
-            let node = &self.nodes[i as usize];
+            let node = &nodes[i as usize];
             if node.is_leaf() {
                 for k in node.offset..node.offset + node.count {
-                    let prim = self.prim_indices[k as usize];
+                    let prim = prims[k as usize];
                     visitor.test_prim(prim);
                     if visit(prim) {
                         return true;
@@ -185,10 +188,10 @@ impl Bvh {
                 }
             } else {
                 let (a, b) = (i + 1, node.offset);
-                let ta = self.nodes[a as usize]
+                let ta = nodes[a as usize]
                     .bounds()
                     .intersect_ray(origin, inv_dir, t_max);
-                let tb = self.nodes[b as usize]
+                let tb = nodes[b as usize]
                     .bounds()
                     .intersect_ray(origin, inv_dir, t_max);
                 let depth = depth + 1;

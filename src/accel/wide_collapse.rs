@@ -15,7 +15,7 @@ use arrayvec::ArrayVec;
 
 use super::Aabb;
 use super::bvh::Bvh;
-use super::huge::HugeVec;
+use super::huge::{Backing, HugeSlice, HugeVec};
 use super::leaf::{LANES, groups_for};
 use super::wide_node::{WIDTH, WideNode};
 
@@ -40,10 +40,10 @@ type Lanes = ArrayVec<(usize, bool), WIDTH>;
 /// whether all its leaves are flat (for subtrees of at most [`MAX_LEAF`] triangles),
 /// and `cost[i - 1]`, the least cost of its subtree in at most `i` lanes.
 struct Costs {
-    first: Vec<u32>,
-    count: Vec<u32>,
+    first: HugeSlice<u32>,
+    count: HugeSlice<u32>,
     flat: Vec<bool>,
-    cost: Vec<[f32; WIDTH]>,
+    cost: HugeSlice<[f32; WIDTH]>,
 }
 
 /// Whether `b` has zero extent along an axis (a box in an axis plane).
@@ -104,39 +104,48 @@ impl Costs {
     /// The costs of every node of `bvh` (not empty), children before parents.
     fn new(bvh: &Bvh) -> Costs {
         let n = bvh.nodes.len();
-        let mut c = Costs {
-            first: vec![0; n],
-            count: vec![0; n],
-            flat: vec![false; n],
-            cost: vec![[0.0; WIDTH]; n],
-        };
+        // Zeroed huge-page mappings from 2 MiB on (the costs are 17 MB at 1M
+        // triangles, where `vec!`'s pages took a fault per 4 KiB, or a `memset` when
+        // reused), written through plain slices: a `HugeVec`'s every access looks at its
+        // backing. `flat` stays a `Vec` (`bool` is not `Pod`; 0.5 MB at 1M).
+        let mut first_v = HugeVec::zeroed(n, Backing::Auto);
+        let mut count_v = HugeVec::zeroed(n, Backing::Auto);
+        let mut cost_v = HugeVec::zeroed(n, Backing::Auto);
+        let mut flat = vec![false; n];
+        let (first, count) = (first_v.as_mut_slice(), count_v.as_mut_slice());
+        let cost: &mut [[f32; WIDTH]] = cost_v.as_mut_slice();
         // Children follow their parent: reverse order meets them first.
         for b in (0..n).rev() {
             let node = &bvh.nodes[b];
             if node.is_leaf() {
                 let bounds = node.bounds();
-                (c.first[b], c.count[b]) = (node.offset, node.count);
-                c.flat[b] = is_flat(&bounds);
-                c.cost[b] = [leaf_cost(bounds.surface_area(), node.count); WIDTH];
+                (first[b], count[b]) = (node.offset, node.count);
+                flat[b] = is_flat(&bounds);
+                cost[b] = [leaf_cost(bounds.surface_area(), node.count); WIDTH];
                 continue;
             }
             let (left, right) = (b + 1, node.offset as usize);
-            (c.first[b], c.count[b]) = (c.first[left], c.count[left] + c.count[right]);
+            (first[b], count[b]) = (first[left], count[left] + count[right]);
             // Only what a leaf could hold needs it (`single`); above, it stays false.
-            if c.count[b] <= MAX_LEAF {
-                c.flat[b] = c.flat[left] && c.flat[right];
+            if count[b] <= MAX_LEAF {
+                flat[b] = flat[left] && flat[right];
             }
-            let splits = splits(&c.cost[left], &c.cost[right]);
+            let splits = splits(&cost[left], &cost[right]);
             let bounds = node.bounds();
-            let room = c.flat[b] && encloses(&bounds);
-            let mut best = single(bounds.surface_area(), c.count[b], splits[WIDTH - 1], room).0;
-            c.cost[b][0] = best;
+            let room = flat[b] && encloses(&bounds);
+            let mut best = single(bounds.surface_area(), count[b], splits[WIDTH - 1], room).0;
+            cost[b][0] = best;
             for i in 2..=WIDTH {
                 best = best.min(splits[i - 1]);
-                c.cost[b][i - 1] = best;
+                cost[b][i - 1] = best;
             }
         }
-        c
+        Costs {
+            first: first_v.into(),
+            count: count_v.into(),
+            flat,
+            cost: cost_v.into(),
+        }
     }
 
     /// [`single`] of interior node `b`.

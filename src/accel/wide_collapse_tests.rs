@@ -198,8 +198,9 @@ fn sibling_leaves_that_fit_one_group_share_it() {
             BvhNode::leaf(bound(0..1), 0, 1),
             BvhNode::leaf(bound(1..4), 1, 3),
             BvhNode::leaf(bound(4..8), 4, 4),
-        ],
-        prim_indices: (0..8).collect(),
+        ]
+        .into(),
+        prim_indices: (0..8).collect::<Vec<u32>>().into(),
     };
     let wide = WideBvh::collapse(&bvh, &tris);
     wide.validate(&tris).unwrap();

@@ -219,8 +219,8 @@ fn deep_trees_still_match() {
     }
     nodes.push(crate::accel::BvhNode::leaf(boxes[n - 1], n as u32 - 1, 1));
     let bvh = Bvh {
-        nodes,
-        prim_indices: (0..n as u32).collect(),
+        nodes: nodes.into(),
+        prim_indices: (0..n as u32).collect::<Vec<u32>>().into(),
     };
     let wide = WideBvh::collapse(&bvh, &tris);
     wide.validate(&tris).unwrap();
