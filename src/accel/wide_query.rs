@@ -69,15 +69,11 @@ impl RayLeaves<'_> {
     /// caller's index of the triangle, read from the group the test has just read).
     /// Any-hit queries too take a lane's hit from the prefilter's values: the scalar
     /// test on each candidate lane cost the shadow rays 8% more instructions.
-    /// `FIRST_APART`: the first group tested apart from the others (of which most
-    /// leaves have none), for the closest-hit query's leaf test, a function of its own:
-    /// in a loop over all groups LLVM hoisted the ray's constants out of it into
-    /// registers it then spilled, and reloaded them from the stack in every leaf (torus
-    /// 100k: 1,509 / 1,887 -> 1,464 / 1,821 instructions per primary / incoherent ray).
-    /// Inlined in the any-hit traversal, the loop is the shorter (1,168 -> 1,109 per
-    /// shadow ray).
+    /// One loop over the groups: testing the first group apart (for the closest-hit
+    /// query) took 3% fewer instructions per torus ray, but no less time on the tori or
+    /// Sponza, and made the Cornell box's single rays 10-17% slower (anchors).
     #[inline(always)]
-    fn hits<const FIRST_APART: bool>(
+    fn hits(
         &self,
         group: usize,
         count: u32,
@@ -86,18 +82,7 @@ impl RayLeaves<'_> {
     ) -> bool {
         let (count, degenerate) = leaf_count(count);
         let groups = &self.wide.leaves.groups[group..group + groups_for(count)];
-        let mut rest = groups;
-        if FIRST_APART {
-            let Some((first, others)) = groups.split_first() else {
-                return false;
-            };
-            if self.group_hits(group, first, degenerate, bound, &mut hit) {
-                return true;
-            }
-            rest = others;
-        }
-        let group = group + (groups.len() - rest.len());
-        for (i, g) in rest.iter().enumerate() {
+        for (i, g) in groups.iter().enumerate() {
             if self.group_hits(group + i, g, degenerate, bound, &mut hit) {
                 return true;
             }
@@ -158,7 +143,7 @@ impl LeafVisitor for ClosestLeaves<'_> {
     fn leaf(&mut self, group: usize, count: u32, t_max: &mut f32) -> bool {
         let (best, limit) = (&mut self.best, self.limit);
         self.leaves
-            .hits::<true>(group, count, &mut self.bound, |lane, prim, h, bound| {
+            .hits(group, count, &mut self.bound, |lane, prim, h, bound| {
                 let closer = |&(_, bp, bh): &(usize, u32, TriangleHit)| {
                     h.t < bh.t || (h.t == bh.t && prim < bp)
                 };
@@ -216,7 +201,7 @@ impl<F: FnMut(u32, &TriangleHit) -> bool> LeafVisitor for AnyLeaves<'_, F> {
     fn leaf(&mut self, group: usize, count: u32, _: &mut f32) -> bool {
         let visit = &mut self.visit;
         self.leaves
-            .hits::<false>(group, count, &mut self.bound, |_, prim, h, _| {
+            .hits(group, count, &mut self.bound, |_, prim, h, _| {
                 visit(prim, h)
             })
     }
