@@ -8,13 +8,13 @@
 //! anonymous memory with 2 MiB pages only where asked (`madvise` mode, the common
 //! default) and only for 2 MiB-aligned extents, which `malloc` neither asks for nor
 //! aligns. So an array of at least [`MIN_MAPPED_BYTES`] gets an anonymous mapping of its
-//! own (`memmap2`, no `unsafe` here), starting on a 2 MiB boundary and advised
-//! `MADV_HUGEPAGE` on Linux (torus 1M, glibc's `hugetlb` tunable, which does the same
-//! for every large `malloc`: incoherent rays -10 to -14%). Elsewhere, or when the
-//! advice or the mapping fails, it is a plain mapping, or a plain `Vec`; the contents
-//! and every operation are the same either way. Smaller arrays stay in a `Vec`: below
-//! a huge page nothing can pay, and a mapping each would cost a system call and a
-//! kernel memory area per small instanced BVH.
+//! own (`memmap2`'s safe API: glint forbids any other), starting on a 2 MiB boundary
+//! and advised `MADV_HUGEPAGE` on Linux (torus 1M, glibc's `hugetlb` tunable, which
+//! does the same for every large `malloc`: incoherent rays -10 to -14%). Elsewhere, or
+//! when the advice or the mapping fails, it is a plain mapping, or a plain `Vec`; the
+//! contents and every operation are the same either way. Smaller arrays stay in a
+//! `Vec`: below a huge page nothing can pay, and a mapping each would cost a system
+//! call and a kernel memory area per small instanced BVH.
 
 use std::fmt;
 use std::marker::PhantomData;
@@ -286,24 +286,6 @@ impl<T: Pod> Clone for HugeVec<T> {
     }
 }
 
-impl<T: Pod + fmt::Debug> fmt::Debug for HugeVec<T> {
-    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
-        self.as_slice().fmt(f)
-    }
-}
-
-impl<T: Pod + PartialEq> PartialEq for HugeVec<T> {
-    fn eq(&self, other: &HugeVec<T>) -> bool {
-        self.as_slice() == other.as_slice()
-    }
-}
-
-impl<T: Pod + PartialEq> PartialEq<Vec<T>> for HugeVec<T> {
-    fn eq(&self, other: &Vec<T>) -> bool {
-        self.as_slice() == other.as_slice()
-    }
-}
-
 impl<T: Pod> From<Vec<T>> for HugeVec<T> {
     /// The same elements, moved into a mapping when large.
     fn from(v: Vec<T>) -> HugeVec<T> {
@@ -404,41 +386,40 @@ impl<T: Pod> Clone for HugeSlice<T> {
     }
 }
 
-impl<T: Pod + fmt::Debug> fmt::Debug for HugeSlice<T> {
-    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
-        self.as_slice().fmt(f)
-    }
+/// What both array types forward to their slice: `Debug`, equality (with each other's
+/// kind and with a `Vec`) and iteration by reference.
+macro_rules! slice_views {
+    ($($ty:ident),*) => {$(
+        impl<T: Pod + fmt::Debug> fmt::Debug for $ty<T> {
+            fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+                self.as_slice().fmt(f)
+            }
+        }
+
+        impl<T: Pod + PartialEq> PartialEq for $ty<T> {
+            fn eq(&self, other: &$ty<T>) -> bool {
+                self.as_slice() == other.as_slice()
+            }
+        }
+
+        impl<T: Pod + PartialEq> PartialEq<Vec<T>> for $ty<T> {
+            fn eq(&self, other: &Vec<T>) -> bool {
+                self.as_slice() == other.as_slice()
+            }
+        }
+
+        impl<'a, T: Pod> IntoIterator for &'a $ty<T> {
+            type Item = &'a T;
+            type IntoIter = std::slice::Iter<'a, T>;
+
+            fn into_iter(self) -> Self::IntoIter {
+                self.as_slice().iter()
+            }
+        }
+    )*};
 }
 
-impl<T: Pod + PartialEq> PartialEq for HugeSlice<T> {
-    fn eq(&self, other: &HugeSlice<T>) -> bool {
-        self.as_slice() == other.as_slice()
-    }
-}
-
-impl<T: Pod + PartialEq> PartialEq<Vec<T>> for HugeSlice<T> {
-    fn eq(&self, other: &Vec<T>) -> bool {
-        self.as_slice() == other.as_slice()
-    }
-}
-
-impl<'a, T: Pod> IntoIterator for &'a HugeSlice<T> {
-    type Item = &'a T;
-    type IntoIter = std::slice::Iter<'a, T>;
-
-    fn into_iter(self) -> Self::IntoIter {
-        self.as_slice().iter()
-    }
-}
-
-impl<'a, T: Pod> IntoIterator for &'a HugeVec<T> {
-    type Item = &'a T;
-    type IntoIter = std::slice::Iter<'a, T>;
-
-    fn into_iter(self) -> Self::IntoIter {
-        self.as_slice().iter()
-    }
-}
+slice_views!(HugeVec, HugeSlice);
 
 #[cfg(test)]
 #[path = "huge_tests.rs"]

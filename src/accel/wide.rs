@@ -2,7 +2,7 @@
 //! tree of [`super::build`] collapsed into nodes of up to eight children whose
 //! boxes are stored structure-of-arrays, so that one slab test covers all eight
 //! (plain `[f32; 8]` lanes that the compiler vectorises, one AVX2 register in the
-//! AVX2 clone of the queries; no `unsafe`), and the
+//! AVX2 clone of the queries; safe code only, as `lib.rs` forbids any other), and the
 //! triangles copied in leaf order, structure-of-arrays ([`super::leaf`]), so a leaf
 //! reads consecutive memory instead of going through the primitive indices and tests
 //! its triangles' early-outs in one vectorised pass.
