@@ -263,15 +263,6 @@ impl<T: Pod> Default for HugeVec<T> {
     }
 }
 
-impl<T: Pod> Deref for HugeVec<T> {
-    type Target = [T];
-
-    #[inline(always)]
-    fn deref(&self) -> &[T] {
-        self.as_slice()
-    }
-}
-
 impl<T: Pod> DerefMut for HugeVec<T> {
     #[inline(always)]
     fn deref_mut(&mut self) -> &mut [T] {
@@ -367,15 +358,6 @@ impl<T: Pod> Default for HugeSlice<T> {
     }
 }
 
-impl<T: Pod> Deref for HugeSlice<T> {
-    type Target = [T];
-
-    #[inline(always)]
-    fn deref(&self) -> &[T] {
-        self.as_slice()
-    }
-}
-
 /// A copy kept as the original's backing asks.
 impl<T: Pod> Clone for HugeSlice<T> {
     fn clone(&self) -> HugeSlice<T> {
@@ -386,10 +368,19 @@ impl<T: Pod> Clone for HugeSlice<T> {
     }
 }
 
-/// What both array types forward to their slice: `Debug`, equality (with each other's
-/// kind and with a `Vec`) and iteration by reference.
+/// What both array types forward to their slice: `Deref`, `Debug`, equality (with each
+/// other's kind and with a `Vec`) and iteration by reference.
 macro_rules! slice_views {
     ($($ty:ident),*) => {$(
+        impl<T: Pod> Deref for $ty<T> {
+            type Target = [T];
+
+            #[inline(always)]
+            fn deref(&self) -> &[T] {
+                self.as_slice()
+            }
+        }
+
         impl<T: Pod + fmt::Debug> fmt::Debug for $ty<T> {
             fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
                 self.as_slice().fmt(f)
