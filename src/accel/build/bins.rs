@@ -4,6 +4,7 @@
 //! partition compares centroids with the least one that bins right of the plane
 //! ([`first_right`]), which the binning's arithmetic decides, so they always agree.
 
+use arrayvec::ArrayVec;
 use multiversion::multiversion;
 use rayon::prelude::*;
 use wide::bytemuck::cast;
@@ -286,21 +287,26 @@ impl Bins {
     #[inline(always)]
     pub(super) fn boxes_around(&self, plane: &Plane) -> (Box4, Box4) {
         let boxes = &self.boxes[plane.axis];
-        let union = |mut bits: u32| {
-            let mut b = BinBox::EMPTY;
-            while bits != 0 {
-                let k = bits.trailing_zeros() as usize % BINS;
-                bits &= bits - 1;
-                b = b.union(boxes[k]);
-            }
-            b.box4()
-        };
         let below = (1u32 << (plane.bin % BINS)) - 1;
         (
-            union(plane.occupied & below),
-            union(plane.occupied & !below),
+            union_of(boxes, plane.occupied & below),
+            union_of(boxes, plane.occupied & !below),
         )
     }
+}
+
+/// The union of the boxes of the bins set in `bits`, in order. A function, not a
+/// closure of [`Bins::boxes_around`] called twice: the closure was compiled apart, for
+/// the baseline instruction set, outside the dispatched `split`.
+#[inline(always)]
+fn union_of(boxes: &[BinBox; BINS], mut bits: u32) -> Box4 {
+    let mut b = BinBox::EMPTY;
+    while bits != 0 {
+        let k = bits.trailing_zeros() as usize % BINS;
+        bits &= bits - 1;
+        b = b.union(boxes[k]);
+    }
+    b.box4()
 }
 
 /// The bins of one chunk of a large node, for the best instruction set the CPU has (a
@@ -384,24 +390,22 @@ pub(super) fn best_sah_plane(bins: &Bins) -> Option<Plane> {
     if m < 2 {
         return None;
     }
-    // The bins occupied on some axis, in order, and the plane after each.
-    let mut axes = [AxesBin::EMPTY; BINS];
-    let mut plane_bin = [0i32; BINS];
-    let mut rest = any;
-    for j in 0..m {
-        let k = rest.trailing_zeros() as usize % BINS;
-        rest &= rest - 1;
-        axes[j % BINS] = AxesBin::of(bins, k);
-        plane_bin[j % BINS] = k as i32 + 1;
-    }
-    // right_cost[j]: area * blocks of the bins from the j-th on, for j >= 1.
-    let mut right_cost = [f32x4::ZERO; BINS];
+    // The bins occupied on some axis from the last down, each transposed, with the cost
+    // (area * blocks) of it and all above it, the right side of the plane below it, and
+    // the plane after it: `down[m - 1 - j]` is the j-th occupied bin's. Transposed as the
+    // sweep down meets them, in one pass, and pushed rather than written into an array
+    // filled first (64 stores per node, of a sweep of 8.6 bins on average, torus 100k).
+    let mut down = ArrayVec::<(AxesBin, f32x4, i32), BINS>::new();
     let mut acc = AxesBin::EMPTY;
-    for j in (1..m).rev() {
-        acc.grow(&axes[j % BINS]);
-        right_cost[j % BINS] = acc.cost();
+    let mut rest = any;
+    for _ in 0..m {
+        let k = (u32::BITS - 1 - rest.leading_zeros()) as usize % BINS;
+        rest &= !(1 << k);
+        let bin = AxesBin::of(bins, k);
+        acc.grow(&bin);
+        down.push((bin, acc.cost(), k as i32 + 1));
     }
-    let total = acc.counts + axes[0].counts;
+    let total = acc.counts;
     let lanes_on = i32x4::from([-(on[0] as i32), -(on[1] as i32), -(on[2] as i32), 0]);
     // Per lane, the best plane so far as selects: infinity until a plane, so that
     // `cost < best_cost` is also the test that the cost is finite (NaN fails it).
@@ -410,14 +414,15 @@ pub(super) fn best_sah_plane(bins: &Bins) -> Option<Plane> {
     let mut left = AxesBin::EMPTY;
     // The plane after each of these bins but the last (nothing on its right).
     for j in 0..m - 1 {
-        left.grow(&axes[j % BINS]);
-        let cost = left.cost() + right_cost[(j + 1) % BINS];
+        let (bin, _, plane_bin) = &down[m - 1 - j];
+        left.grow(bin);
+        let cost = left.cost() + down[m - 2 - j].1;
         // Primitives on both sides: a plane of the axis.
         let splits = left.counts.simd_gt(i32x4::ZERO) & total.simd_gt(left.counts) & lanes_on;
         let better: i32x4 = cast(cost.simd_lt(best_cost));
         let better = better & splits;
         best_cost = cast::<i32x4, f32x4>(better).bitselect(cost, best_cost);
-        best_bin = better.bitselect(i32x4::splat(plane_bin[j % BINS]), best_bin);
+        best_bin = better.bitselect(i32x4::splat(*plane_bin), best_bin);
     }
     let (costs, planes) = (best_cost.to_array(), best_bin.to_array());
     let mut best: Option<Plane> = None;
