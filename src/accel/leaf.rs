@@ -14,6 +14,8 @@
 //! [`intersect_triangle_sheared`]: super::intersect_triangle_sheared
 
 use glam::Vec3;
+use multiversion::target::match_target;
+use multiversion::{inherit_target, multiversion};
 use wide::u32x4;
 
 use super::Ray;
@@ -124,10 +126,19 @@ pub fn lane_mask(i: usize, count: usize) -> u32 {
     }
 }
 
+/// How many slots ahead of a leaf [`push_leaf`] prefetches the triangles of.
+const PREFETCH_SLOTS: usize = 16;
+
 /// Appends to `groups` (the [`LeafTris::groups`] being made) the groups of the leaf of
 /// `count` triangles at slot `slot` of `prims`; returns the wide node's `(child, count)`
 /// for it ([`leaf_lane`]). Leaves pushed in slot order keep the groups in the
 /// triangles' order: neighbouring leaves stay close.
+///
+/// Leaves come in slot order, so each call asks the caches for the triangles
+/// [`PREFETCH_SLOTS`] slots on, which a later call reads: `prims` is in the tree's order,
+/// not the mesh's, and these reads missed (1M-triangle torus: the collapse from 45 to
+/// 36.5 ms). A clone for SSE, where the prefetch is a safe call.
+#[multiversion(targets("x86_64+sse4.2"))]
 pub fn push_leaf(
     groups: &mut HugeVec<TriGroup>,
     slot: u32,
@@ -137,6 +148,30 @@ pub fn push_leaf(
 ) -> (u32, u32) {
     let first_group = groups.len();
     let (slot, end) = (slot as usize, (slot + count) as usize);
+    /// Prefetches both cache lines `tri` may span into every level, in the clone with
+    /// the instruction's target feature (nothing in the fallback). A hint: it reads
+    /// nothing and faults on no address.
+    #[inherit_target]
+    #[inline]
+    fn prefetch(tri: &[Vec3; 3]) {
+        let start = (tri as *const [Vec3; 3]).cast::<i8>();
+        for line in [start, start.wrapping_add(size_of::<[Vec3; 3]>() - 1)] {
+            match_target! {
+                "x86_64+sse4.2" => std::arch::x86_64::_mm_prefetch::<
+                    { std::arch::x86_64::_MM_HINT_T0 },
+                >(line),
+                _ => {
+                    let _ = line;
+                }
+            }
+        }
+    }
+    let ahead = (slot + PREFETCH_SLOTS).min(prims.len())..(end + PREFETCH_SLOTS).min(prims.len());
+    for &prim in &prims[ahead] {
+        if let Some(tri) = positions.get(prim as usize) {
+            prefetch(tri);
+        }
+    }
     let mut degenerate = false;
     for start in (slot..end).step_by(LANES) {
         let mut group = TriGroup::PADDING;
