@@ -255,13 +255,16 @@ impl LeafTris {
 }
 
 /// The per-ray constants of the prefilter: the shear of [`RayShear`] and the ray
-/// origin's coordinates in the sheared axis order.
+/// origin's coordinates in the sheared axis order, each spread to the [`LANES`] lanes
+/// once per ray, so that the leaf test reads them from here as vectors, where it
+/// spread and spilled them to its stack at every call.
 pub struct RayLeaf {
     axes: [usize; 3],
-    origin: [f32; 3],
-    sx: f32,
-    sy: f32,
-    sz: f32,
+    origin: [[f32; LANES]; 3],
+    sx: [f32; LANES],
+    sy: [f32; LANES],
+    sz: [f32; LANES],
+    abs_sz: [f32; LANES],
 }
 
 impl RayLeaf {
@@ -272,10 +275,11 @@ impl RayLeaf {
         let o: &[f32; 3] = ray.origin.as_ref();
         RayLeaf {
             axes: [s.kx, s.ky, s.kz],
-            origin: [o[s.kx], o[s.ky], o[s.kz]],
-            sx: s.sx,
-            sy: s.sy,
-            sz: s.sz,
+            origin: [[o[s.kx]; LANES], [o[s.ky]; LANES], [o[s.kz]; LANES]],
+            sx: [s.sx; LANES],
+            sy: [s.sy; LANES],
+            sz: [s.sz; LANES],
+            abs_sz: [s.sz.abs(); LANES],
         }
     }
 
@@ -334,7 +338,7 @@ impl RayLeaf {
             dets[lane] = det;
             t_scaleds[lane] = t_scaled;
             // Only used when a lane passes: computed after that test (LLVM sinks it).
-            [sizes[0][lane], sizes[1][lane], sizes[2][lane]] = sheared.sizes(self.sz.abs());
+            [sizes[0][lane], sizes[1][lane], sizes[2][lane]] = sheared.sizes(self.abs_sz[lane]);
         }
         let mask = u32x4::from(bits).to_bitmask();
         if mask == 0 {
@@ -354,8 +358,9 @@ impl RayLeaf {
     #[inline(always)]
     fn shear(&self, g: &TriGroup, lane: usize) -> Sheared {
         let [kx, ky, kz] = self.axes;
-        let [ox, oy, oz] = self.origin;
-        let (sx, sy, sz) = (self.sx, self.sy, self.sz);
+        let o = &self.origin;
+        let (ox, oy, oz) = (o[0][lane], o[1][lane], o[2][lane]);
+        let (sx, sy, sz) = (self.sx[lane], self.sy[lane], self.sz[lane]);
         let (a, b, c) = (&g.v[0], &g.v[1], &g.v[2]);
         let (a_x, a_y, a_z) = (a[kx][lane] - ox, a[ky][lane] - oy, a[kz][lane] - oz);
         let (b_x, b_y, b_z) = (b[kx][lane] - ox, b[ky][lane] - oy, b[kz][lane] - oz);
@@ -517,7 +522,7 @@ impl Candidates {
 /// not a second copy of the shear for this rare path.
 #[cold]
 #[inline(never)]
-fn scalar_lane(
+pub(super) fn scalar_lane(
     g: &TriGroup,
     lane: usize,
     ray: &Ray,
@@ -545,16 +550,28 @@ fn scalar_lane(
 /// at most: the errors of the sheared coordinates 2 gamma(5) P; of the edge functions
 /// together 24 gamma(5) P S + 6 gamma(2) S^2 =: E; of det E + gamma(2) |det|, of
 /// t_scaled E Z + gamma(6) Z |det|; so the bound is at most
-/// (1 + 1e-5) u ((120 P S + 12 S^2) (Z + t) / |det| + 6 Z + 2 t), u = 2^-24, evaluated
-/// here in f64 (no overflow or underflow from f32 inputs) with a margin for its own
-/// rounding.
+/// (1 + 1e-5) u ((120 P S + 12 S^2) (Z + t) / |det| + 6 Z + 2 t), u = 2^-24. The test
+/// compares both sides times |det| (positive), which decides the same, without the
+/// division: t |det| > 3.0001 u ((120 P S + 12 S^2) (Z + t) + (6 Z + 2 t) |det|),
+/// evaluated in f64 from f32 inputs (t |det| exact; every term positive, so each side
+/// is within a few f64 roundings, 1e-15 relative, of its exact value, which the margin
+/// of 3.0001 over 3 (1 + 1e-5) dwarfs; products of at most three f32 magnitudes
+/// neither overflow nor underflow). A t that is not positive, or NaN, is never clear.
 #[inline(always)]
 pub(super) fn clear_of_zero(t: f32, det: f32, sizes: [f32; 3]) -> bool {
-    f64::from(t) > 3.0001 * t_error_bound(t, det, sizes)
+    let [pz, s, z] = sizes.map(f64::from);
+    let (t, det) = (f64::from(t), f64::from(det).abs());
+    let unit = f64::from(f32::EPSILON) * 0.5;
+    // (S + Pz) (1 + u), with a margin for the rounding of this sum and product.
+    let p = (s + pz) * (1.0 + 2.0 * unit);
+    let bound = (120.0 * p * s + 12.0 * s * s) * (z + t) + (6.0 * z + 2.0 * t) * det;
+    t * det > 3.0001 * unit * bound
 }
 
-/// The bound of [`clear_of_zero`] on the scalar test's bound on t's rounding error.
-#[inline(always)]
+/// The bound of [`clear_of_zero`] on the scalar test's bound on t's rounding error,
+/// divided out, as `clear_of_zero` compared t with it before it multiplied both sides
+/// by |det|; for the tests (the two forms must agree but next to the boundary).
+#[cfg(test)]
 fn t_error_bound(t: f32, det: f32, sizes: [f32; 3]) -> f64 {
     let [pz, s, z] = sizes.map(f64::from);
     let (t, det) = (f64::from(t).abs(), f64::from(det).abs());
@@ -563,6 +580,10 @@ fn t_error_bound(t: f32, det: f32, sizes: [f32; 3]) -> f64 {
     let p = (s + pz) * (1.0 + 2.0 * unit);
     unit * ((120.0 * p * s + 12.0 * s * s) * (z + t) / det + 6.0 * z + 2.0 * t)
 }
+
+#[path = "leaf_closest.rs"]
+mod closest;
+pub use closest::GroupHits;
 
 #[cfg(test)]
 #[path = "leaf_tests.rs"]

@@ -253,3 +253,211 @@ fn padding_lanes_never_pass_the_prefilter() {
         }
     }
 }
+
+#[test]
+fn clear_of_zero_times_det_decides_as_the_divided_bound() {
+    // The test without the division against `t > 3.0001 t_error_bound` (the divided
+    // form the scalar test's bound was proven for), over magnitudes from f32's least
+    // to its largest: the same answer except within f64 rounding of the boundary,
+    // where either answer is sound.
+    let mut rng = Lcg(23);
+    let magnitude = |rng: &mut Lcg| {
+        let e = (rng.next_f32() * 250.0) as i32 - 140;
+        (2.0f32).powi(e) * (1.0 + rng.next_f32())
+    };
+    let (mut clear, mut unclear) = (0, 0);
+    for _ in 0..200_000 {
+        let sizes = [
+            magnitude(&mut rng),
+            magnitude(&mut rng),
+            magnitude(&mut rng),
+        ];
+        let det = magnitude(&mut rng) * if rng.next_f32() < 0.5 { -1.0 } else { 1.0 };
+        // A t near the boundary: a multiple of the bound around 3.0001.
+        let bound = t_error_bound(1.0, det, sizes);
+        let near = (3.0001 * bound) as f32 * (0.5 + rng.next_f32());
+        for t in [near, magnitude(&mut rng)] {
+            if !t.is_finite() || t == 0.0 {
+                continue;
+            }
+            let divided = f64::from(t) / (3.0001 * t_error_bound(t, det, sizes));
+            let ours = clear_of_zero(t, det, sizes);
+            if (divided - 1.0).abs() > 1e-12 {
+                assert_eq!(ours, divided > 1.0, "{t:e} {det:e} {sizes:?}");
+            }
+            clear += ours as usize;
+            unclear += !ours as usize;
+        }
+    }
+    assert!(
+        clear > 10_000 && unclear > 10_000,
+        "{clear} clear, {unclear} not"
+    );
+    // Not positive, NaN: never clear.
+    for t in [0.0, -0.0, -1.0, f32::NAN] {
+        assert!(!clear_of_zero(t, 1.0, [1.0; 3]));
+    }
+}
+
+/// The closest-hit query's answer for one group as its leaf test computes it
+/// (`RayLeaf::closest`, then the closest decided lane and the lanes left to the
+/// scalar test, kept by (t, then prim)): the lane and its hit.
+fn group_closest(
+    ray: &Ray,
+    g: &TriGroup,
+    t_max: f32,
+    degenerate: bool,
+) -> Option<(usize, TriangleHit)> {
+    let s = RayShear::new(ray);
+    let mut lanes = RayLeaf::new(ray, &s).closest(g, t_max, degenerate)?;
+    let mut best: Option<(usize, TriangleHit)> = None;
+    let mut offer = |lane: usize, h: TriangleHit| {
+        let closer = |&(bl, bh): &(usize, TriangleHit)| {
+            h.t < bh.t || (h.t == bh.t && g.prim[lane] < g.prim[bl])
+        };
+        if best.as_ref().is_none_or(closer) {
+            best = Some((lane, h));
+        }
+    };
+    if let Some(lane) = lanes.closest(&g.prim) {
+        offer(lane, lanes.hit(lane));
+    }
+    for lane in (0..LANES).filter(|&l| lanes.scalar & (1 << l) != 0) {
+        if let Some(h) = scalar_lane(g, lane, ray, t_max, degenerate) {
+            offer(lane, h);
+        }
+    }
+    best
+}
+
+#[test]
+fn a_groups_closest_lane_is_the_scalar_tests_least_t_then_prim() {
+    // Groups of parallel copies of a triangle stacked along the ray (some at the same
+    // distance, in lanes whose prims fall, so that ties go to a later lane), near the
+    // world origin and far from it, some within rounding of the ray's origin (a t the
+    // lanes' values cannot decide), some degenerate: the group's answer is the least
+    // (t, prim) of the scalar test's hits, bit for bit.
+    let mut rng = Lcg(31);
+    let (mut hits, mut ties, mut unclear) = (0, 0, 0);
+    for i in 0..20_000 {
+        let far = [0.0, 10.0, 1e4][i % 3];
+        let centre = rng.vec() * 4.0 + Vec3::splat(far);
+        let (e1, e2) = (rng.dir(), rng.dir());
+        let dir = rng.dir();
+        // Aimed at the triangle's centroid.
+        let target = centre + (e1 + e2) / 3.0;
+        let origin = target - dir * (0.5 + 2.0 * rng.next_f32());
+        let ray = Ray::new(origin, dir);
+        let mut g = TriGroup::PADDING;
+        let lanes = 1 + rng.below(LANES as u32) as usize;
+        for lane in 0..lanes {
+            // Offsets along the ray: a few shared, some tiny (next to the origin).
+            let offset = match rng.below(4) {
+                0 => 0.0,
+                1 => 0.25,
+                2 => -(target - origin).length() * (1.0 - 1e-6 * rng.next_f32()),
+                _ => rng.next_f32(),
+            };
+            let shift = dir * offset;
+            let mut tri = [centre + shift, centre + e1 + shift, centre + e2 + shift];
+            if i % 11 == 0 && lane == 0 {
+                tri[2] = tri[0] + (tri[1] - tri[0]) * 0.5;
+            }
+            g.set_triangle(lane, tri);
+            g.prim[lane] = (LANES - lane) as u32 * 10 + rng.below(3);
+        }
+        let degenerate = (0..lanes).any(|l| {
+            let [a, b, c] = g.triangle(l);
+            is_degenerate(a, b, c)
+        });
+        let t_max = [f32::INFINITY, 3.0][i % 2];
+        let s = RayShear::new(&ray);
+        let mut want: Option<(usize, TriangleHit)> = None;
+        for lane in 0..lanes {
+            let [a, b, c] = g.triangle(lane);
+            let Some(h) = intersect_triangle_sheared(&s, ray.origin, a, b, c, t_max) else {
+                continue;
+            };
+            let closer = |&(bl, bh): &(usize, TriangleHit)| {
+                h.t < bh.t || (h.t == bh.t && g.prim[lane] < g.prim[bl])
+            };
+            if want.as_ref().is_none_or(closer) {
+                if want.is_some_and(|(_, bh)| bh.t == h.t) {
+                    ties += 1;
+                }
+                want = Some((lane, h));
+            }
+        }
+        let got = group_closest(&ray, &g, t_max, degenerate);
+        let bits = |w: Option<(usize, TriangleHit)>| {
+            w.map(|(l, h)| (l, [h.t, h.b0, h.b1, h.b2].map(f32::to_bits)))
+        };
+        assert_eq!(bits(got), bits(want), "{ray:?} {t_max} {g:?}");
+        hits += want.is_some() as usize;
+        if let Some(mut c) = RayLeaf::new(&ray, &s).closest(&g, t_max, degenerate) {
+            unclear += (c.hits != 0 && c.closest(&g.prim).is_none()) as usize;
+        }
+    }
+    assert!(
+        hits > 10_000 && ties > 100 && unclear > 10,
+        "{hits} hits, {ties} ties, {unclear} unclear"
+    );
+}
+
+#[test]
+fn a_lane_whose_t_is_not_clear_of_zero_may_still_be_the_closest() {
+    // Lane 0: a triangle the ray grazes from just off it (t within the f32 test's
+    // rounding of 0, which the scalar test recomputes in f64); lane 1: a small
+    // triangle across the ray, placed between that recomputed t and lane 0's f32 t.
+    // The recomputed one is the closer, though lane 1's t is the least of the lanes'
+    // values.
+    let mut rng = Lcg(57);
+    let mut found = 0;
+    for i in 0..200_000 {
+        let centre = rng.vec() * 4.0 + Vec3::splat([1.0, 10.0, 100.0][i % 3]);
+        let (e1, e2) = (rng.dir() * 4.0, rng.dir() * 1e-2);
+        let a = [centre, centre + e1, centre + e2];
+        let target = centre + e1 * 0.3 + e2 * 0.3;
+        let n = e1.cross(e2).normalize();
+        let along = (e1.normalize() + n * 10f32.powi(-((i % 4) as i32) - 1)).normalize();
+        let ray = Ray::new(target + n * 1e-4 - along * 1e-3, along);
+        let s = RayShear::new(&ray);
+        let Some((t32, _)) = t_and_error(&s, ray.origin, a) else {
+            continue;
+        };
+        let Some(h) = intersect_triangle_sheared(&s, ray.origin, a[0], a[1], a[2], f32::INFINITY)
+        else {
+            continue;
+        };
+        // Only where the recomputed t is the lower (a NaN t32 fails the check below).
+        if h.t >= t32 {
+            continue;
+        }
+        // Lane 1 across the ray at a t between the two.
+        let t_mid = 0.5 * (h.t + t32);
+        let p = ray.origin + ray.dir * t_mid;
+        let (u, v) = ray.dir.any_orthonormal_pair();
+        let r = 0.1 * t_mid.max(1e-6);
+        let b = [p + u * r, p - u * r + v * r, p - u * r - v * r];
+        let Some(hb) = intersect_triangle_sheared(&s, ray.origin, b[0], b[1], b[2], f32::INFINITY)
+        else {
+            continue;
+        };
+        if !(h.t < hb.t && hb.t < t32) {
+            continue;
+        }
+        let mut g = TriGroup::PADDING;
+        g.set_triangle(0, a);
+        g.set_triangle(1, b);
+        g.prim[0] = 1;
+        g.prim[1] = 0;
+        let got = group_closest(&ray, &g, f32::INFINITY, false);
+        assert_eq!(
+            got.map(|(l, h)| (l, h.t.to_bits())),
+            Some((0, h.t.to_bits())),
+            "{ray:?} {a:?} {b:?}"
+        );
+        found += 1;
+    }
+    assert!(found > 0, "{found}");
+}
