@@ -239,14 +239,25 @@ impl WideBvh {
                 if let Some(entry) = next.take() {
                     stack.push(entry);
                 }
-                if NEAREST_FIRST {
-                    // The leaves met load from memory together, while the first is
-                    // tested: the first read of a leaf's group, a cache miss, was the
-                    // leaf test's largest stall in perf (a quarter of its time).
-                    // Prefetching the next node as well did not pay, nor did these
-                    // prefetches before the queueing above. (A pointer: no bounds
-                    // check, as nothing is read through it.)
-                    let groups = self.leaves.groups.as_ptr();
+                // The leaves met load from memory together, while the first is tested:
+                // the first read of a leaf's group, a cache miss, was the leaf test's
+                // largest stall in perf (a quarter of its time). Prefetching the next
+                // node as well did not pay, nor did these prefetches before the
+                // queueing above. (A pointer: no bounds check, as nothing is read
+                // through it.)
+                let groups = self.leaves.groups.as_ptr();
+                if NEAREST_FIRST && leaves & (leaves - 1) == 0 {
+                    // One leaf (three in four nodes with leaves on the torus): no loop,
+                    // whose exit branch the predictor missed, and no entry distance
+                    // check, as its box was met just now within the same cull distance
+                    // (see `next` above).
+                    let lane = leaves.trailing_zeros() as usize % WIDTH;
+                    let (child, count) = (node.child[lane], node.count[lane]);
+                    visitor.prefetch(groups.wrapping_add(child as usize));
+                    if visitor.leaf(child as usize, count, t_max) {
+                        return true;
+                    }
+                } else if NEAREST_FIRST {
                     let mut met = leaves;
                     while met != 0 {
                         let lane = met.trailing_zeros() as usize % WIDTH;
