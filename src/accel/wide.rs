@@ -341,6 +341,45 @@ impl WideBvh {
             stack.push((node.child[far], t[far]));
             return Some((node.child[near], t[near]));
         }
+        // Three or four (nine in ten nodes of three or more on the torus): the keys of
+        // the first four lanes (the fourth's the largest key when there are three)
+        // through a sorting network, without a branch but on their number.
+        let r1 = inner & (inner - 1);
+        let r2 = r1 & (r1 - 1);
+        let r3 = r2 & (r2 - 1);
+        if r3 & r3.wrapping_sub(1) == 0 {
+            let key_at = |m: u32| {
+                let lane = m.trailing_zeros();
+                key(t[lane as usize % WIDTH], lane)
+            };
+            let mut k = [key_at(inner), key_at(r1), key_at(r2), u64::MAX];
+            if r3 != 0 {
+                k[3] = key_at(r3);
+            }
+            // Ascending: k[0] the nearest.
+            let mut exchange = |i: usize, j: usize| {
+                let (a, b) = (k[i], k[j]);
+                k[i] = a.min(b);
+                k[j] = a.max(b);
+            };
+            exchange(0, 1);
+            exchange(2, 3);
+            exchange(0, 2);
+            exchange(1, 3);
+            exchange(1, 2);
+            let entry = |k: u64| {
+                let lane = k as u32 as usize % WIDTH;
+                (node.child[lane], t[lane])
+            };
+            // The fourth pushed then dropped again when there are three, so that the
+            // number pushed takes no branch.
+            let len = stack.len();
+            stack.push(entry(k[3]));
+            stack.truncate(len + (r3 != 0) as usize);
+            stack.push(entry(k[2]));
+            stack.push(entry(k[1]));
+            return Some(entry(k[0]));
+        }
         let mut keys = [0u64; WIDTH];
         let mut n = 0;
         while inner != 0 {
