@@ -97,39 +97,50 @@ impl RayBoxes {
     }
 
     /// Entry distance of each child box (lanes the ray misses hold junk) and the
-    /// mask of lanes whose box the ray meets in [0, t_max]. The same arithmetic
-    /// as [`Aabb::intersect_ray`], lane by lane, in loops without branches so
-    /// that they compile to SIMD, and the mask through `wide` (a movemask: LLVM
-    /// turns a plain loop of shifted bits into a tangle of shuffles). A plane
-    /// distance of zero may come out as -0 where `intersect_ray` has +0 (see
-    /// `neg_inv`): the entry distance starts from +0 and keeps it against an equal
-    /// -0 (vmaxps returns its second operand on equal inputs), and a compare does not
-    /// tell them apart, so the mask and the order of the children are the same.
+    /// mask of lanes whose box the ray meets in [0, t_max]: [`Aabb::intersect_ray`]
+    /// lane by lane, in loops without branches so that they compile to SIMD, and the
+    /// mask through `wide` (a movemask: LLVM turns a plain loop of shifted bits into a
+    /// tangle of shuffles). The same lanes and, to the bit, the same entry distances, in
+    /// fewer steps on the chain from a node's load to its children's (each float
+    /// min or max takes four cycles):
+    /// - the entry distance is the largest of +0 and the plane distances as signed
+    ///   integers of their bits (one cycle each), which order non-negative floats as
+    ///   floats and put negative ones, -0 and the NaN of `0 * inf` (negative on x86)
+    ///   below +0: the largest of +0 and the plane distances above it, as
+    ///   `intersect_ray` takes it (a NaN with its sign bit clear, which only a NaN in
+    ///   the ray or a box makes, would be taken instead of ignored);
+    /// - the box is met unless the entry distance lies past an exit plane's distance
+    ///   or `t_max`, each times the margin: `t_near <= min(far..., t_max) * margin`
+    ///   with NaN distances ignored, as the rounded product is monotonic (the
+    ///   products and compares side by side, where the minimum took three steps).
+    ///
+    /// A plane distance of zero may come out as -0 where `intersect_ray` has +0 (see
+    /// `neg_inv`): the entry distance takes both as +0, and a compare does not tell
+    /// them apart.
     #[inline(always)]
     pub(super) fn test(&self, node: &WideNode, t_max: f32) -> ([f32; WIDTH], u32) {
         let b = &node.bounds;
         let (o, ninv) = (self.origin, self.neg_inv);
+        let bits = |x: f32| x.to_bits() as i32;
+        let t_max = t_max * BOX_MARGIN;
         let mut t_near = [0.0f32; WIDTH];
         let mut hit = [0u32; WIDTH];
         for lane in 0..WIDTH {
-            let near_x = (o[0] - b[self.near[0]][lane]) * ninv[0];
-            let near_y = (o[1] - b[self.near[1]][lane]) * ninv[1];
-            let near_z = (o[2] - b[self.near[2]][lane]) * ninv[2];
-            let far_x = (o[0] - b[self.far[0]][lane]) * ninv[0];
-            let far_y = (o[1] - b[self.far[1]][lane]) * ninv[1];
-            let far_z = (o[2] - b[self.far[2]][lane]) * ninv[2];
-            t_near[lane] = 0.0f32.max(near_x).max(near_y).max(near_z);
-            // From infinity, which is not NaN: then each f32::min is one minps whose
-            // second operand is known not NaN, where from t_max (which LLVM cannot
-            // prove is not NaN) each needs a NaN check and a blend. The minimum of the
-            // same four values, NaN ignored, in another order: the same value.
-            let far = f32::INFINITY.min(far_x).min(far_y).min(far_z);
-            let t_far = far.min(t_max) * BOX_MARGIN;
-            // All bits set where the ray meets the box: the mask is one movmskps of
-            // the compare, where wide's f32x8 compare (two f32x4 halves in the
-            // dispatched clones, which lack the AVX cfg) split the register and
-            // joined it again.
-            hit[lane] = ((t_near[lane] <= t_far) as u32).wrapping_neg();
+            let near_x = bits((o[0] - b[self.near[0]][lane]) * ninv[0]);
+            let near_y = bits((o[1] - b[self.near[1]][lane]) * ninv[1]);
+            let near_z = bits((o[2] - b[self.near[2]][lane]) * ninv[2]);
+            let far_x = (o[0] - b[self.far[0]][lane]) * ninv[0] * BOX_MARGIN;
+            let far_y = (o[1] - b[self.far[1]][lane]) * ninv[1] * BOX_MARGIN;
+            let far_z = (o[2] - b[self.far[2]][lane]) * ninv[2] * BOX_MARGIN;
+            // A pair first: two steps rather than three.
+            let t = f32::from_bits(near_x.max(0).max(near_y.max(near_z)) as u32);
+            t_near[lane] = t;
+            // Ordered compares: false for NaN.
+            let past = (t > far_x) | (t > far_y) | (t > far_z) | (t > t_max);
+            // All bits set where the ray meets the box: the mask is one movmskps,
+            // where wide's f32x8 compare (two f32x4 halves in the dispatched clones,
+            // which lack the AVX cfg) split the register and joined it again.
+            hit[lane] = (!past as u32).wrapping_neg();
         }
         (t_near, u32x8::from(hit).to_bitmask())
     }
