@@ -432,20 +432,17 @@ impl<'a> RayLeaves<'a> {
 // Runtime dispatch: one clone of each query per instruction set, the traversal and
 // triangle tests (`#[inline(always)]`) compiled inside each, picked once per process
 // from the CPU's features; no `-C target-cpu` needed. Rust never contracts a * b + c
-// into an FMA by itself, so every clone computes bit-identical results. The single-ray
-// queries also have an x86-64-v4 (AVX-512) clone: the same 8-lane code with 32 vector
-// registers spills less (rays example, torus 100k, least CPU time of 7: incoherent
-// 328-332 -> 319-328 ms, shadow 202-204 -> 195-197, primary unchanged); the packet
-// queries do not (packets of primary rays 7% slower in a first anchors run).
+// into an FMA by itself, so every clone computes bit-identical results. The any-hit
+// query also has an x86-64-v4 (AVX-512) clone: the same 8-lane code with 32 vector
+// registers spills less (rays example, torus 100k, least CPU time of 7: shadow 202-204
+// -> 195-197 ms). The closest-hit query has none: with its per-group leaf test, primary
+// rays took 492-500 ms in it against 468 in the AVX2 clone (4M rays, least of 5); nor
+// do the packet queries (packets of primary rays 7% slower in a first anchors run).
 
 /// [`WideBvh::closest_hit`] for the best instruction set the CPU has. (Its inner
 /// functions reach the query through closures: a function with target features
 /// implements no `Fn` trait, whatever clippy's `redundant_closure` says.)
-#[multiversion(targets(
-    "x86_64+avx512f+avx512bw+avx512cd+avx512dq+avx512vl+avx2+fma",
-    "x86_64+avx2+fma",
-    "x86_64+sse4.2"
-))]
+#[multiversion(targets("x86_64+avx2+fma", "x86_64+sse4.2"))]
 #[allow(clippy::redundant_closure)]
 fn closest_hit_dispatched(
     wide: &WideBvh,
