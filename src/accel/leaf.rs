@@ -135,7 +135,7 @@ const PREFETCH_SLOTS: usize = 16;
 /// triangles' order: neighbouring leaves stay close.
 ///
 /// Leaves come in slot order, so each call asks the caches for the triangles
-/// [`PREFETCH_SLOTS`] slots on, which a later call reads: `prims` is in the tree's order,
+/// `PREFETCH_SLOTS` slots on, which a later call reads: `prims` is in the tree's order,
 /// not the mesh's, and these reads missed (1M-triangle torus: the collapse from 45 to
 /// 36.5 ms). A clone for SSE, where the prefetch is a safe call.
 #[multiversion(targets("x86_64+sse4.2"))]

@@ -6,11 +6,13 @@
 //!
 //! Every lane computes exactly what the single-ray query computes for its ray, so each
 //! ray's answer is [`WideBvh::any_hit`]'s:
-//! - The box test is `RayBoxes::test`'s arithmetic lane by lane; the near and far
-//!   planes of each axis are picked per lane by the sign of the lane's inverse
-//!   direction (a blend), so rays of every octant share a packet. A ray visits exactly
-//!   the nodes and leaves its single-ray traversal visits (the order differs, which
-//!   an any-hit answer does not depend on).
+//! - The box test meets the boxes `RayBoxes::test` meets, at the same entry distances
+//!   (through float minimums and maximums, where `RayBoxes::test` takes integer ones
+//!   and side-by-side compares for a shorter chain); the near and far planes of each
+//!   axis are picked per lane by the sign of the lane's inverse direction (a blend), so
+//!   rays of every octant share a packet. A ray without NaN visits exactly the nodes
+//!   and leaves its single-ray traversal visits (the order differs, which an any-hit
+//!   answer does not depend on).
 //! - The leaf prefilter is `RayLeaf::shear` + `candidates` lane by lane, with the
 //!   triangle's coordinates in the ray's permuted axis order (`RayShear::{kx, ky,
 //!   kz}`). That order is one per traversal: the packet is split at setup into
@@ -199,7 +201,8 @@ impl PacketRays {
     }
 
     /// Each ray's entry distance into child `c` of `node` (junk where it misses) and
-    /// the mask of rays that meet it in [0, cull]: `RayBoxes::test` lane by lane, the
+    /// the mask of rays that meet it in [0, cull]: what `RayBoxes::test` gives, lane by
+    /// lane (the same lanes and entry distances by another route), the
     /// near plane of each axis the minimum unless the lane's inverse direction has its
     /// sign bit set (as `RayBoxes::new` picks it).
     #[inline(always)]
