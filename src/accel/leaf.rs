@@ -26,6 +26,9 @@ use super::triangle::{RayShear, TriangleHit, intersect_triangle_flagged, is_dege
 /// hold 3.3 triangles on average (at most 4 there), so eight lanes would mostly pad.
 pub const LANES: usize = 4;
 
+/// Lanes of two groups tested in one pass (`RayLeaf::closest_pair`): one AVX register.
+pub const PAIR: usize = 2 * LANES;
+
 /// Lane mask of a full group.
 const ALL_LANES: u32 = (1 << LANES) - 1;
 
@@ -260,11 +263,11 @@ impl LeafTris {
 /// spread and spilled them to its stack at every call.
 pub struct RayLeaf {
     axes: [usize; 3],
-    origin: [[f32; LANES]; 3],
-    sx: [f32; LANES],
-    sy: [f32; LANES],
-    sz: [f32; LANES],
-    abs_sz: [f32; LANES],
+    origin: [[f32; PAIR]; 3],
+    sx: [f32; PAIR],
+    sy: [f32; PAIR],
+    sz: [f32; PAIR],
+    abs_sz: [f32; PAIR],
 }
 
 impl RayLeaf {
@@ -275,11 +278,11 @@ impl RayLeaf {
         let o: &[f32; 3] = ray.origin.as_ref();
         RayLeaf {
             axes: [s.kx, s.ky, s.kz],
-            origin: [[o[s.kx]; LANES], [o[s.ky]; LANES], [o[s.kz]; LANES]],
-            sx: [s.sx; LANES],
-            sy: [s.sy; LANES],
-            sz: [s.sz; LANES],
-            abs_sz: [s.sz.abs(); LANES],
+            origin: [[o[s.kx]; PAIR], [o[s.ky]; PAIR], [o[s.kz]; PAIR]],
+            sx: [s.sx; PAIR],
+            sy: [s.sy; PAIR],
+            sz: [s.sz; PAIR],
+            abs_sz: [s.sz.abs(); PAIR],
         }
     }
 
@@ -294,20 +297,45 @@ impl RayLeaf {
     /// Rust never fuses a product and a sum. No branches, so the loop vectorises.
     #[inline(always)]
     pub fn candidates(&self, g: &TriGroup, t_max: f32) -> Option<Candidates> {
+        let [kx, ky, kz] = self.axes;
+        let [a, b, c] = &g.v;
+        let v = [
+            [a[kx], a[ky], a[kz]],
+            [b[kx], b[ky], b[kz]],
+            [c[kx], c[ky], c[kz]],
+        ];
+        self.prefilter(&v, t_max)
+    }
+
+    /// The sheared axes of the ray (`RayShear`'s kx, ky, kz).
+    #[inline(always)]
+    pub(super) fn axes(&self) -> [usize; 3] {
+        self.axes
+    }
+
+    /// [`Self::candidates`] over `N` lanes (a multiple of [`LANES`]) of vertices `v`
+    /// (`v[vertex][k]`, the coordinates in the sheared axis order): one group, or two
+    /// sibling leaves' groups in one 8-lane pass.
+    #[inline(always)]
+    pub(super) fn prefilter<const N: usize>(
+        &self,
+        v: &[[[f32; N]; 3]; 3],
+        t_max: f32,
+    ) -> Option<LaneValues<N>> {
         // Local arrays, every lane written, gathered at the end: LLVM then drops their
         // zero initialisation, which it kept (six stores per group) in a struct
         // written field by field.
-        let mut e = [[0.0; LANES]; 3];
-        let mut dets = [0.0; LANES];
-        let mut t_scaleds = [0.0; LANES];
-        let mut sizes = [[0.0; LANES]; 3];
+        let mut e = [[0.0; N]; 3];
+        let mut dets = [0.0; N];
+        let mut t_scaleds = [0.0; N];
+        let mut sizes = [[0.0; N]; 3];
         // All bits set in a lane that passes, so that the masks are one movmskps each
         // (a lane's bit shifted into place became shuffles, ors and extracts; LANES is
         // 4, one u32x4).
-        let mut bits = [0u32; LANES];
-        let mut zeros = [0u32; LANES];
-        for lane in 0..LANES {
-            let sheared = self.shear(g, lane);
+        let mut bits = [0u32; N];
+        let mut zeros = [0u32; N];
+        for lane in 0..N {
+            let sheared = self.shear(v, lane);
             let (xy, z) = (sheared.xy, sheared.z);
             let [ax, ay, bx, by, cx, cy] = xy;
             let u = cx * by - cy * bx;
@@ -340,13 +368,13 @@ impl RayLeaf {
             // Only used when a lane passes: computed after that test (LLVM sinks it).
             [sizes[0][lane], sizes[1][lane], sizes[2][lane]] = sheared.sizes(self.abs_sz[lane]);
         }
-        let mask = u32x4::from(bits).to_bitmask();
+        let mask = lane_mask_of(&bits);
         if mask == 0 {
             return None;
         }
-        Some(Candidates {
+        Some(LaneValues {
             mask,
-            zero: u32x4::from(zeros).to_bitmask(),
+            zero: lane_mask_of(&zeros),
             e,
             det: dets,
             t_scaled: t_scaleds,
@@ -354,17 +382,17 @@ impl RayLeaf {
         })
     }
 
-    /// Lane `lane` of `g` in ray space, as the scalar test computes it.
+    /// Lane `lane` of vertices `v` (in the sheared axis order) in ray space, as the
+    /// scalar test computes it.
     #[inline(always)]
-    fn shear(&self, g: &TriGroup, lane: usize) -> Sheared {
-        let [kx, ky, kz] = self.axes;
+    fn shear<const N: usize>(&self, v: &[[[f32; N]; 3]; 3], lane: usize) -> Sheared {
         let o = &self.origin;
         let (ox, oy, oz) = (o[0][lane], o[1][lane], o[2][lane]);
         let (sx, sy, sz) = (self.sx[lane], self.sy[lane], self.sz[lane]);
-        let (a, b, c) = (&g.v[0], &g.v[1], &g.v[2]);
-        let (a_x, a_y, a_z) = (a[kx][lane] - ox, a[ky][lane] - oy, a[kz][lane] - oz);
-        let (b_x, b_y, b_z) = (b[kx][lane] - ox, b[ky][lane] - oy, b[kz][lane] - oz);
-        let (c_x, c_y, c_z) = (c[kx][lane] - ox, c[ky][lane] - oy, c[kz][lane] - oz);
+        let (a, b, c) = (&v[0], &v[1], &v[2]);
+        let (a_x, a_y, a_z) = (a[0][lane] - ox, a[1][lane] - oy, a[2][lane] - oz);
+        let (b_x, b_y, b_z) = (b[0][lane] - ox, b[1][lane] - oy, b[2][lane] - oz);
+        let (c_x, c_y, c_z) = (c[0][lane] - ox, c[1][lane] - oy, c[2][lane] - oz);
         Sheared {
             rel_z: [a_z, b_z, c_z],
             xy: [
@@ -378,6 +406,17 @@ impl RayLeaf {
             z: [sz * a_z, sz * b_z, sz * c_z],
         }
     }
+}
+
+/// Bit `i` set where `lanes[i]` has all bits set: a movmskps per [`LANES`] lanes.
+#[inline(always)]
+pub(super) fn lane_mask_of<const N: usize>(lanes: &[u32; N]) -> u32 {
+    let mut mask = 0;
+    for (i, chunk) in lanes.chunks_exact(LANES).enumerate() {
+        let chunk: [u32; LANES] = chunk.try_into().unwrap_or_default();
+        mask |= u32x4::from(chunk).to_bitmask() << (i * LANES);
+    }
+    mask
 }
 
 /// A triangle in ray space: the z coordinates of its vertices relative to the origin

@@ -461,3 +461,101 @@ fn a_lane_whose_t_is_not_clear_of_zero_may_still_be_the_closest() {
     }
     assert!(found > 0, "{found}");
 }
+
+/// The closest-hit query's answer for two one-group leaves tested in one pass
+/// (`RayLeaf::closest_pair`, as `RayLeaves::closest_pair` uses it): the pair's lane
+/// (`group * LANES + lane`) and its hit.
+fn pair_closest(ray: &Ray, g: [&TriGroup; 2], t_max: f32) -> Option<(usize, TriangleHit)> {
+    let s = RayShear::new(ray);
+    let mut lanes = RayLeaf::new(ray, &s).closest_pair(g, t_max)?;
+    let prims: [u32; PAIR] = std::array::from_fn(|l| g[l / LANES].prim[l % LANES]);
+    let mut best: Option<(usize, TriangleHit)> = None;
+    let mut offer = |lane: usize, h: TriangleHit| {
+        let closer = |&(bl, bh): &(usize, TriangleHit)| {
+            h.t < bh.t || (h.t == bh.t && prims[lane] < prims[bl])
+        };
+        if best.as_ref().is_none_or(closer) {
+            best = Some((lane, h));
+        }
+    };
+    if let Some(lane) = lanes.closest(&prims) {
+        offer(lane, lanes.hit(lane));
+    }
+    for lane in (0..PAIR).filter(|&l| lanes.scalar & (1 << l) != 0) {
+        if let Some(h) = scalar_lane(g[lane / LANES], lane % LANES, ray, t_max, false) {
+            offer(lane, h);
+        }
+    }
+    best
+}
+
+#[test]
+fn a_pairs_closest_lane_is_the_scalar_tests_least_t_then_prim_over_both_groups() {
+    // Two groups of parallel copies of a triangle stacked along the ray, as in the
+    // single-group test above, with the second group's prims lower, so that ties go
+    // to it, and its copies often nearer (the far leaf holding the closer hit): the
+    // pair's answer is the least (t, prim) of the scalar test's hits over both groups.
+    let mut rng = Lcg(37);
+    let (mut hits, mut second, mut ties) = (0, 0, 0);
+    for i in 0..20_000 {
+        let far = [0.0, 10.0, 1e4][i % 3];
+        let centre = rng.vec() * 4.0 + Vec3::splat(far);
+        let (e1, e2) = (rng.dir(), rng.dir());
+        let dir = rng.dir();
+        let target = centre + (e1 + e2) / 3.0;
+        let origin = target - dir * (0.5 + 2.0 * rng.next_f32());
+        let ray = Ray::new(origin, dir);
+        let mut g = [TriGroup::PADDING; 2];
+        for (k, group) in g.iter_mut().enumerate() {
+            let lanes = 1 + rng.below(LANES as u32) as usize;
+            for lane in 0..lanes {
+                let offset = match rng.below(4) {
+                    0 => 0.0,
+                    1 => 0.25,
+                    2 => -(target - origin).length() * (1.0 - 1e-6 * rng.next_f32()),
+                    _ => rng.next_f32() - 0.5 * k as f32,
+                };
+                let shift = dir * offset;
+                group.set_triangle(
+                    lane,
+                    [centre + shift, centre + e1 + shift, centre + e2 + shift],
+                );
+                group.prim[lane] = ((2 - k) * LANES - lane) as u32 * 10 + rng.below(3);
+            }
+        }
+        let t_max = [f32::INFINITY, 3.0][i % 2];
+        let s = RayShear::new(&ray);
+        let mut want: Option<(usize, TriangleHit)> = None;
+        for lane in 0..PAIR {
+            let (k, l) = (lane / LANES, lane % LANES);
+            if g[k].is_padding(l) {
+                continue;
+            }
+            let [a, b, c] = g[k].triangle(l);
+            let Some(h) = intersect_triangle_sheared(&s, ray.origin, a, b, c, t_max) else {
+                continue;
+            };
+            let prim = |lane: usize| g[lane / LANES].prim[lane % LANES];
+            let closer = |&(bl, bh): &(usize, TriangleHit)| {
+                h.t < bh.t || (h.t == bh.t && prim(lane) < prim(bl))
+            };
+            if want.as_ref().is_none_or(closer) {
+                if want.is_some_and(|(_, bh)| bh.t == h.t) {
+                    ties += 1;
+                }
+                want = Some((lane, h));
+            }
+        }
+        let got = pair_closest(&ray, [&g[0], &g[1]], t_max);
+        let bits = |w: Option<(usize, TriangleHit)>| {
+            w.map(|(l, h)| (l, [h.t, h.b0, h.b1, h.b2].map(f32::to_bits)))
+        };
+        assert_eq!(bits(got), bits(want), "{ray:?} {t_max} {g:?}");
+        hits += want.is_some() as usize;
+        second += want.is_some_and(|(l, _)| l >= LANES) as usize;
+    }
+    assert!(
+        hits > 10_000 && second > 3_000 && ties > 100,
+        "{hits} hits, {second} in the second group, {ties} ties"
+    );
+}

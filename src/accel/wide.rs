@@ -264,25 +264,47 @@ impl WideBvh {
                         met &= met - 1;
                         visitor.prefetch(groups.wrapping_add(node.child[lane] as usize));
                     }
-                    // Leaves nearest first, after the interior children are queued.
-                    while leaves != 0 {
-                        let lane = if leaves & (leaves - 1) == 0 {
-                            leaves.trailing_zeros()
-                        } else {
-                            let mut rest = leaves;
-                            let mut best = u64::MAX;
-                            while rest != 0 {
-                                let lane = rest.trailing_zeros();
-                                rest &= rest - 1;
-                                best = best.min(key(t[lane as usize % WIDTH], lane));
-                            }
-                            best as u32
-                        };
-                        leaves &= !(1 << lane);
+                    // Leaves nearest first, after the interior children are queued, the
+                    // two nearest at a time (`LeafVisitor::leaf_pair`: one 8-lane pass
+                    // for two one-group leaves). The far one's box starts no nearer, so
+                    // when the near one's is culled, so is the far one's.
+                    let leaf = |lane: u32| {
                         let lane = lane as usize % WIDTH;
-                        let (child, count) = (node.child[lane], node.count[lane]);
-                        if t[lane] <= *t_max * BOX_MARGIN
-                            && visitor.leaf(child as usize, count, t_max)
+                        (node.child[lane] as usize, node.count[lane])
+                    };
+                    while leaves != 0 {
+                        if leaves & (leaves - 1) == 0 {
+                            let lane = leaves.trailing_zeros();
+                            leaves = 0;
+                            let (child, count) = leaf(lane);
+                            if t[lane as usize % WIDTH] <= *t_max * BOX_MARGIN
+                                && visitor.leaf(child, count, t_max)
+                            {
+                                return true;
+                            }
+                            continue;
+                        }
+                        let mut rest = leaves;
+                        let (mut near, mut far) = (u64::MAX, u64::MAX);
+                        while rest != 0 {
+                            let lane = rest.trailing_zeros();
+                            rest &= rest - 1;
+                            let k = key(t[lane as usize % WIDTH], lane);
+                            if k < near {
+                                far = near;
+                                near = k;
+                            } else {
+                                far = far.min(k);
+                            }
+                        }
+                        let (near, far) = (near as u32, far as u32);
+                        leaves &= !(1 << near | 1 << far);
+                        if t[near as usize % WIDTH] <= *t_max * BOX_MARGIN
+                            && visitor.leaf_pair(
+                                [leaf(near), leaf(far)],
+                                t[far as usize % WIDTH],
+                                t_max,
+                            )
                         {
                             return true;
                         }

@@ -15,11 +15,16 @@
 use multiversion::target::match_target;
 use multiversion::{inherit_target, multiversion};
 
-use super::leaf::{LANES, RayLeaf, TriGroup, groups_for, leaf_count, scalar_lane};
+use super::leaf::{LANES, RayLeaf, TriGroup, groups_for, leaf_count};
 use super::triangle::{RayShear, TriangleHit};
 use super::wide_node::RayBoxes;
 use super::wide_packet::{PACKET, PacketHits};
-use super::{HitLanes, Ray, RayLanes, WideBvh};
+use super::{BOX_MARGIN, HitLanes, Ray, RayLanes, WideBvh};
+
+#[path = "wide_closest.rs"]
+mod closest;
+pub(super) use closest::three_ulps_up;
+use closest::{Best, ClosestLeaves};
 
 /// What a query does at each leaf the traversal reaches.
 pub(super) trait LeafVisitor {
@@ -27,6 +32,15 @@ pub(super) trait LeafVisitor {
     /// triangles and flag); may lower `t_max` (the traversal's cull distance); returns
     /// true to stop the traversal.
     fn leaf(&mut self, group: usize, count: u32, t_max: &mut f32) -> bool;
+
+    /// Tests a node's two nearest leaves met, `(group, count)` each, the second's
+    /// box entered at `far_entry`: by default one after the other, the second only if
+    /// its box still starts within the cull distance. Returns true to stop.
+    #[inline(always)]
+    fn leaf_pair(&mut self, pair: [(usize, u32); 2], far_entry: f32, t_max: &mut f32) -> bool {
+        let [(g0, c0), (g1, c1)] = pair;
+        self.leaf(g0, c0, t_max) || (far_entry <= *t_max * BOX_MARGIN && self.leaf(g1, c1, t_max))
+    }
 
     /// Asks the cache for the memory of `item` (a leaf group the traversal is about
     /// to read; never read through this pointer); nothing by default.
@@ -123,135 +137,30 @@ impl RayLeaves<'_> {
     }
 }
 
-/// The closest-hit query's leaf test and best hit so far.
-struct ClosestLeaves<'a> {
-    leaves: RayLeaves<'a>,
-    best: Best,
-}
-
-/// The closest-hit query's best hit so far and its bounds.
-struct Best {
-    /// The best hit: where the triangle sits in the leaves (`group * LANES + lane`), its
-    /// index and the hit.
-    hit: Option<(usize, u32, TriangleHit)>,
-    /// The query's own t_max.
-    limit: f32,
-    /// Past the best t so far by more than the rounding of the triangle test's scaled
-    /// early-out (t_scaled against bound * det, three roundings): then every triangle
-    /// with t at or below the best passes it whatever the order of the leaves, and the
-    /// comparison below alone decides, so the hit is the least (t, index) of the
-    /// triangles hit before `limit`. It changes only with the best hit.
-    bound: f32,
-}
-
-impl LeafVisitor for ClosestLeaves<'_> {
-    #[inline(always)]
-    fn leaf(&mut self, group: usize, count: u32, t_max: &mut f32) -> bool {
-        self.groups(
-            group,
-            count,
-            t_max,
-            |leaves, best, index, g, degenerate, t_max| {
-                leaves.closest(best, index, g, degenerate, t_max)
-            },
-        )
-    }
-}
-
-impl ClosestLeaves<'_> {
-    /// Calls `test(leaves, best, index, g, degenerate, t_max)` for each group `g` of
-    /// the leaf at group `group` with the lane count `count` (`index`: the lane of
-    /// its first triangle, `group * LANES`; `degenerate`: the leaf's flag).
-    #[inline(always)]
-    fn groups(
-        &mut self,
-        group: usize,
-        count: u32,
-        t_max: &mut f32,
-        mut test: impl FnMut(&RayLeaves, &mut Best, usize, &TriGroup, bool, &mut f32),
-    ) -> bool {
-        let (count, degenerate) = leaf_count(count);
-        let groups = &self.leaves.wide.leaves.groups[group..group + groups_for(count)];
-        for (i, g) in groups.iter().enumerate() {
-            let index = (group + i) * LANES;
-            test(&self.leaves, &mut self.best, index, g, degenerate, t_max);
-        }
-        false
-    }
-}
-
-impl RayLeaves<'_> {
-    /// The closest-hit query's test of group `g` (at lane `index` in the leaves, in a
-    /// leaf with the flag `degenerate`): its candidate lanes decided at once
-    /// (`RayLeaf::closest`), the closest decided hit offered to `best`, then each lane
-    /// left to the scalar test.
-    #[inline(always)]
-    fn closest(
-        &self,
-        best: &mut Best,
-        index: usize,
-        g: &TriGroup,
-        degenerate: bool,
-        t_max: &mut f32,
-    ) {
-        let Some(mut lanes) = self.pre.closest(g, best.bound, degenerate) else {
-            return;
-        };
-        if let Some(lane) = lanes.closest(&g.prim) {
-            let h = lanes.hit(lane);
-            best.offer(index + lane, g.prim[lane], &h, t_max);
-        }
-        let mut scalar = lanes.scalar;
-        while scalar != 0 {
-            let lane = scalar.trailing_zeros() as usize;
-            scalar &= scalar - 1;
-            let h = scalar_lane(g, lane, self.ray, best.bound, degenerate);
-            if let Some(h) = h {
-                best.offer(index + lane, g.prim[lane], &h, t_max);
-            }
-        }
-    }
-}
-
-impl Best {
-    /// Keeps hit `h` of triangle `prim` (at `lane` in the leaves) when it is closer than
-    /// the best so far by (t, then prim); then lowers the bound and `t_max`.
-    #[inline(always)]
-    fn offer(&mut self, lane: usize, prim: u32, h: &TriangleHit, t_max: &mut f32) {
-        let closer =
-            |&(_, bp, bh): &(usize, u32, TriangleHit)| h.t < bh.t || (h.t == bh.t && prim < bp);
-        if self.hit.as_ref().is_none_or(closer) {
-            *t_max = h.t;
-            self.bound = three_ulps_up(h.t).min(self.limit);
-            self.hit = Some((lane, prim, *h));
-        }
-    }
-}
-
-/// `t.next_up()` three times, for a hit's t (positive and finite): positive floats are
-/// ordered like their bits, and the one past `f32::MAX` is infinity, where `next_up`
-/// stays. Integer arithmetic, where the three `next_up` were about 40 instructions of
-/// NaN, infinity and sign checks per closer hit.
-#[inline(always)]
-pub(super) fn three_ulps_up(t: f32) -> f32 {
-    debug_assert!(t > 0.0 && t.is_finite(), "{t}");
-    f32::from_bits((t.to_bits() + 3).min(f32::INFINITY.to_bits()))
-}
-
 /// A leaf visitor that hands each leaf to `test(leaves, group, count, t_max)` and
 /// each cache line to prefetch to `line(address)`.
-struct Calls<'a, V, F, P> {
+struct Calls<'a, V, F, Q, P> {
     leaves: &'a mut V,
     test: F,
+    /// The test of a node's two nearest leaves (`LeafVisitor::leaf_pair`).
+    pair: Q,
     line: P,
 }
 
-impl<V, F: FnMut(&mut V, usize, u32, &mut f32) -> bool, P: Fn(*const u8)> LeafVisitor
-    for Calls<'_, V, F, P>
+impl<V, F, Q, P> LeafVisitor for Calls<'_, V, F, Q, P>
+where
+    F: FnMut(&mut V, usize, u32, &mut f32) -> bool,
+    Q: FnMut(&mut V, [(usize, u32); 2], f32, &mut f32) -> bool,
+    P: Fn(*const u8),
 {
     #[inline(always)]
     fn leaf(&mut self, group: usize, count: u32, t_max: &mut f32) -> bool {
         (self.test)(self.leaves, group, count, t_max)
+    }
+
+    #[inline(always)]
+    fn leaf_pair(&mut self, pair: [(usize, u32); 2], far_entry: f32, t_max: &mut f32) -> bool {
+        (self.pair)(self.leaves, pair, far_entry, t_max)
     }
 
     #[inline(always)]
@@ -304,6 +213,15 @@ impl WideBvh {
             ray,
             t_max,
             |leaves, group, count, t_max| leaves.leaf(group, count, t_max),
+            |leaves, pair, far_entry, t_max| {
+                leaves.pair(
+                    pair,
+                    far_entry,
+                    t_max,
+                    |leaves, group, count, t_max| leaves.leaf(group, count, t_max),
+                    |leaves, best, groups, t_max| leaves.closest_pair(best, groups, t_max),
+                )
+            },
             |_| {},
         )
     }
@@ -317,6 +235,7 @@ impl WideBvh {
         ray: &Ray,
         t_max: f32,
         test: impl FnMut(&mut ClosestLeaves, usize, u32, &mut f32) -> bool,
+        pair: impl FnMut(&mut ClosestLeaves, [(usize, u32); 2], f32, &mut f32) -> bool,
         line: impl Fn(*const u8),
     ) -> Option<(u32, u32, TriangleHit)> {
         // One division for the box test's inverse direction and the shear's scale.
@@ -334,6 +253,7 @@ impl WideBvh {
         let mut visitor = Calls {
             leaves: &mut leaves,
             test,
+            pair,
             line,
         };
         self.traverse::<true>(&boxes, &mut cull, &mut visitor);
@@ -499,14 +419,21 @@ fn closest_hit_dispatched(
             }
         }
     }
-    wide.closest_hit_with(
-        ray,
-        t_max,
-        |leaves, first, count, t_max| {
-            // A leaf of one group straight to its test: nearly all of them (2.29
-            // groups per 2.26 leaves, primary rays on the torus), and `leaf`'s loop
-            // cost a second call (torus 100k, per primary / incoherent ray: 1,401 /
-            // 1,734 -> 1,331 / 1,636 instructions).
+    /// A node's two nearest one-group leaves in one 8-lane pass, out of line as
+    /// `group` is.
+    #[inherit_target]
+    #[inline(never)]
+    fn pair(leaves: &RayLeaves, best: &mut Best, groups: [usize; 2], t_max: &mut f32) {
+        leaves.closest_pair(best, groups, t_max)
+    }
+    /// The test of a leaf: one group straight to its test: nearly all of them (2.29
+    /// groups per 2.26 leaves, primary rays on the torus), and `leaf`'s loop
+    /// cost a second call (torus 100k, per primary / incoherent ray: 1,401 /
+    /// 1,734 -> 1,331 / 1,636 instructions).
+    #[inherit_target]
+    #[inline]
+    fn one(leaves: &mut ClosestLeaves, first: usize, count: u32, t_max: &mut f32) -> bool {
+        {
             let (n, degenerate) = leaf_count(count);
             if (1..=LANES).contains(&n) {
                 let g = &leaves.leaves.wide.leaves.groups[first];
@@ -522,6 +449,20 @@ fn closest_hit_dispatched(
             } else {
                 leaf(leaves, first, count, t_max)
             }
+        }
+    }
+    wide.closest_hit_with(
+        ray,
+        t_max,
+        |leaves, first, count, t_max| one(leaves, first, count, t_max),
+        |leaves, leaf_pair, far_entry, t_max| {
+            leaves.pair(
+                leaf_pair,
+                far_entry,
+                t_max,
+                |leaves, first, count, t_max| one(leaves, first, count, t_max),
+                |l, best, groups, t_max| pair(l, best, groups, t_max),
+            )
         },
         |address| prefetch(address),
     )
