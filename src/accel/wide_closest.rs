@@ -57,7 +57,10 @@ impl ClosestLeaves<'_> {
         pair_test: impl FnOnce(&RayLeaves, &mut Best, [usize; 2], &mut f32),
     ) -> bool {
         let [(g0, c0), (g1, c1)] = pair;
-        let one_group = |count| leaf_count(count).0 <= LANES && !leaf_count(count).1;
+        let one_group = |count| {
+            let (n, degenerate) = leaf_count(count);
+            (1..=LANES).contains(&n) && !degenerate
+        };
         if one_group(c0) && one_group(c1) {
             pair_test(&self.leaves, &mut self.best, [g0, g1], t_max);
             false
