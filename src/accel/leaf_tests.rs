@@ -309,25 +309,65 @@ fn group_closest(
     degenerate: bool,
 ) -> Option<(usize, TriangleHit)> {
     let s = RayShear::new(ray);
-    let mut lanes = RayLeaf::new(ray, &s).closest(g, t_max, degenerate)?;
+    let lanes = RayLeaf::new(ray, &s).closest(g, t_max, degenerate)?;
+    least_hit(lanes, &g.prim, |lane| {
+        scalar_lane(g, lane, ray, t_max, degenerate)
+    })
+}
+
+/// The least (t, then prim) of the closest decided lane of `lanes` and of the hits
+/// `scalar(lane)` of the lanes it leaves to the scalar test: the lane and its hit.
+fn least_hit<const N: usize>(
+    mut lanes: GroupHits<N>,
+    prims: &[u32; N],
+    scalar: impl Fn(usize) -> Option<TriangleHit>,
+) -> Option<(usize, TriangleHit)> {
     let mut best: Option<(usize, TriangleHit)> = None;
     let mut offer = |lane: usize, h: TriangleHit| {
         let closer = |&(bl, bh): &(usize, TriangleHit)| {
-            h.t < bh.t || (h.t == bh.t && g.prim[lane] < g.prim[bl])
+            h.t < bh.t || (h.t == bh.t && prims[lane] < prims[bl])
         };
         if best.as_ref().is_none_or(closer) {
             best = Some((lane, h));
         }
     };
-    if let Some(lane) = lanes.closest(&g.prim) {
+    if let Some(lane) = lanes.closest(prims) {
         offer(lane, lanes.hit(lane));
     }
-    for lane in (0..LANES).filter(|&l| lanes.scalar & (1 << l) != 0) {
-        if let Some(h) = scalar_lane(g, lane, ray, t_max, degenerate) {
+    for lane in (0..N).filter(|&l| lanes.scalar & (1 << l) != 0) {
+        if let Some(h) = scalar(lane) {
             offer(lane, h);
         }
     }
     best
+}
+
+/// A triangle (corner `centre`, edges `e1`, `e2`) near the world origin or far from it
+/// (by `i`), and a ray aimed at its centroid `target` from up to 2.5 away.
+struct Aimed {
+    centre: Vec3,
+    e1: Vec3,
+    e2: Vec3,
+    target: Vec3,
+    ray: Ray,
+}
+
+impl Aimed {
+    fn new(rng: &mut Lcg, i: usize) -> Aimed {
+        let far = [0.0, 10.0, 1e4][i % 3];
+        let centre = rng.vec() * 4.0 + Vec3::splat(far);
+        let (e1, e2) = (rng.dir(), rng.dir());
+        let dir = rng.dir();
+        let target = centre + (e1 + e2) / 3.0;
+        let origin = target - dir * (0.5 + 2.0 * rng.next_f32());
+        Aimed {
+            centre,
+            e1,
+            e2,
+            target,
+            ray: Ray::new(origin, dir),
+        }
+    }
 }
 
 #[test]
@@ -340,14 +380,14 @@ fn a_groups_closest_lane_is_the_scalar_tests_least_t_then_prim() {
     let mut rng = Lcg(31);
     let (mut hits, mut ties, mut unclear) = (0, 0, 0);
     for i in 0..20_000 {
-        let far = [0.0, 10.0, 1e4][i % 3];
-        let centre = rng.vec() * 4.0 + Vec3::splat(far);
-        let (e1, e2) = (rng.dir(), rng.dir());
-        let dir = rng.dir();
-        // Aimed at the triangle's centroid.
-        let target = centre + (e1 + e2) / 3.0;
-        let origin = target - dir * (0.5 + 2.0 * rng.next_f32());
-        let ray = Ray::new(origin, dir);
+        let Aimed {
+            centre,
+            e1,
+            e2,
+            target,
+            ray,
+        } = Aimed::new(&mut rng, i);
+        let (origin, dir) = (ray.origin, ray.dir);
         let mut g = TriGroup::PADDING;
         let lanes = 1 + rng.below(LANES as u32) as usize;
         for lane in 0..lanes {
@@ -467,26 +507,11 @@ fn a_lane_whose_t_is_not_clear_of_zero_may_still_be_the_closest() {
 /// (`group * LANES + lane`) and its hit.
 fn pair_closest(ray: &Ray, g: [&TriGroup; 2], t_max: f32) -> Option<(usize, TriangleHit)> {
     let s = RayShear::new(ray);
-    let mut lanes = RayLeaf::new(ray, &s).closest_pair(g, t_max)?;
+    let lanes = RayLeaf::new(ray, &s).closest_pair(g, t_max)?;
     let prims: [u32; PAIR] = std::array::from_fn(|l| g[l / LANES].prim[l % LANES]);
-    let mut best: Option<(usize, TriangleHit)> = None;
-    let mut offer = |lane: usize, h: TriangleHit| {
-        let closer = |&(bl, bh): &(usize, TriangleHit)| {
-            h.t < bh.t || (h.t == bh.t && prims[lane] < prims[bl])
-        };
-        if best.as_ref().is_none_or(closer) {
-            best = Some((lane, h));
-        }
-    };
-    if let Some(lane) = lanes.closest(&prims) {
-        offer(lane, lanes.hit(lane));
-    }
-    for lane in (0..PAIR).filter(|&l| lanes.scalar & (1 << l) != 0) {
-        if let Some(h) = scalar_lane(g[lane / LANES], lane % LANES, ray, t_max, false) {
-            offer(lane, h);
-        }
-    }
-    best
+    least_hit(lanes, &prims, |lane| {
+        scalar_lane(g[lane / LANES], lane % LANES, ray, t_max, false)
+    })
 }
 
 #[test]
@@ -498,13 +523,14 @@ fn a_pairs_closest_lane_is_the_scalar_tests_least_t_then_prim_over_both_groups()
     let mut rng = Lcg(37);
     let (mut hits, mut second, mut ties) = (0, 0, 0);
     for i in 0..20_000 {
-        let far = [0.0, 10.0, 1e4][i % 3];
-        let centre = rng.vec() * 4.0 + Vec3::splat(far);
-        let (e1, e2) = (rng.dir(), rng.dir());
-        let dir = rng.dir();
-        let target = centre + (e1 + e2) / 3.0;
-        let origin = target - dir * (0.5 + 2.0 * rng.next_f32());
-        let ray = Ray::new(origin, dir);
+        let Aimed {
+            centre,
+            e1,
+            e2,
+            target,
+            ray,
+        } = Aimed::new(&mut rng, i);
+        let (origin, dir) = (ray.origin, ray.dir);
         let mut g = [TriGroup::PADDING; 2];
         for (k, group) in g.iter_mut().enumerate() {
             let lanes = 1 + rng.below(LANES as u32) as usize;
