@@ -7,7 +7,8 @@
 //! through an index array. Each node's bounds come from its parent (from the
 //! SAH bins and the partition pass), so a node's primitives are read twice:
 //! once to bin them, once to partition them. The top of the recursion runs in
-//! parallel with `rayon::join`, and nodes too large for that to have split the
+//! parallel with `rayon::join` (on more than one thread; on one, the recursion writes
+//! the whole tree into one array), and nodes too large for that to have split the
 //! work yet bin in parallel chunks. Every parallel step combines its parts in a
 //! fixed order with exact operations (min, max, integer sums), so the tree is
 //! identical whatever the thread count.
@@ -236,7 +237,7 @@ impl NodeBounds {
 /// Nodes built by one task, in depth-first order; child offsets are relative
 /// to the task's subtree, whose first node lands at `shift` in the final array.
 struct Piece {
-    nodes: Vec<BvhNode>,
+    nodes: HugeVec<BvhNode>,
     shift: u32,
 }
 
@@ -267,14 +268,24 @@ pub(super) fn build_backed(bounds: &[Aabb], split: SplitMethod, backing: Backing
         refs.iter_mut().zip(bounds).enumerate().for_each(make);
     }
     let root = NodeBounds::of(&refs);
-    let (pieces, count) = build_subtree(split, &mut refs, 0, 1, root);
+    let nodes = if refs.len() < PARALLEL_MIN || rayon::current_num_threads() == 1 {
+        // No task would run beside another: the whole tree in one array kept as
+        // `backing` says, without pieces (an allocation each) copied into it.
+        let mut nodes = HugeVec::with_backing(node_estimate(refs.len()), backing);
+        let mut bins = Bins::empty(Box4::EMPTY);
+        build_node(split, &mut refs, 0, 1, root, &mut bins, &mut nodes);
+        nodes
+    } else {
+        let (pieces, count) = build_subtree(split, &mut refs, 0, 1, root);
+        assemble(pieces, count, backing)
+    };
     let mut prim_indices = HugeVec::zeroed(refs.len(), backing);
     for (p, r) in prim_indices.iter_mut().zip(refs.iter()) {
         *p = r.index();
     }
     drop(refs);
     Bvh {
-        nodes: assemble(pieces, count, backing),
+        nodes,
         prim_indices,
     }
 }
@@ -321,7 +332,7 @@ fn build_subtree(
     let n = refs.len();
     let mut bins = Bins::empty(Box4::EMPTY);
     if n < PARALLEL_MIN {
-        let mut nodes = Vec::with_capacity(node_estimate(n));
+        let mut nodes = HugeVec::with_backing(node_estimate(n), Backing::Heap);
         build_node(method, refs, prim_base, depth, b, &mut bins, &mut nodes);
         let count = nodes.len() as u32;
         return (vec![Piece { nodes, shift: 0 }], count);
@@ -330,7 +341,7 @@ fn build_subtree(
         let leaf = BvhNode::leaf(b.node.aabb(), prim_base, n as u32);
         return (
             vec![Piece {
-                nodes: vec![leaf],
+                nodes: HugeVec::from_slice(&[leaf], Backing::Heap),
                 shift: 0,
             }],
             1,
@@ -342,8 +353,9 @@ fn build_subtree(
         || build_subtree(method, right, prim_base + mid as u32, depth + 1, rb),
     );
     let mut pieces = Vec::with_capacity(1 + lp.len() + rp.len());
+    let interior = BvhNode::interior(b.node.aabb(), 1 + ln);
     pieces.push(Piece {
-        nodes: vec![BvhNode::interior(b.node.aabb(), 1 + ln)],
+        nodes: HugeVec::from_slice(&[interior], Backing::Heap),
         shift: 0,
     });
     pieces.extend(lp.into_iter().map(|p| Piece {
@@ -367,7 +379,7 @@ fn build_node(
     depth: u32,
     b: NodeBounds,
     bins: &mut Bins,
-    out: &mut Vec<BvhNode>,
+    out: &mut HugeVec<BvhNode>,
 ) {
     let n = refs.len();
     let Some((mid, lb, rb)) = split(method, refs, b, depth, bins) else {
