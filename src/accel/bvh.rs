@@ -498,7 +498,12 @@ mod tests {
         use crate::accel::build::build_backed;
         use crate::accel::huge::Backing;
         // 70k primitives fill their `PrimRef`s in parallel (and take a mapping with
-        // `Auto`); 500 fill them in order.
+        // `Auto`); 500 fill them in order. On one thread the nodes go straight into
+        // the array `backing` says, on more they are built in pieces and copied.
+        let one = rayon::ThreadPoolBuilder::new()
+            .num_threads(1)
+            .build()
+            .unwrap();
         for n in [70_000, 500] {
             let bounds = random_tri_bounds(n, 7);
             let want = Bvh::build(&bounds, SplitMethod::SahBinned);
@@ -506,6 +511,12 @@ mod tests {
                 let b = build_backed(&bounds, SplitMethod::SahBinned, backing);
                 assert_eq!(b.nodes, want.nodes, "{n} prims, {backing:?}");
                 assert_eq!(b.prim_indices, want.prim_indices, "{n} prims, {backing:?}");
+                let b = one.install(|| build_backed(&bounds, SplitMethod::SahBinned, backing));
+                assert_eq!(b.nodes, want.nodes, "{n} prims, {backing:?}, 1 thread");
+                assert_eq!(
+                    b.prim_indices, want.prim_indices,
+                    "{n} prims, {backing:?}, 1 thread"
+                );
             }
         }
     }

@@ -248,6 +248,14 @@ impl<T: Pod> HugeVec<T> {
         }
     }
 
+    /// Keeps the first `len` elements (all of them when there are fewer).
+    pub fn truncate(&mut self, len: usize) {
+        match &mut self.store {
+            Store::Heap(v) => v.truncate(len),
+            Store::Mapped(m) => m.len = m.len.min(len),
+        }
+    }
+
     /// Gives back unused capacity of a `Vec`; a mapping keeps its address space, whose
     /// untouched pages take no memory.
     pub fn shrink_to_fit(&mut self) {

@@ -14,7 +14,7 @@
 use arrayvec::ArrayVec;
 
 use super::Aabb;
-use super::bvh::Bvh;
+use super::bvh::{Bvh, BvhNode};
 use super::huge::{Backing, HugeSlice, HugeVec};
 use super::leaf::{LANES, groups_for};
 use super::wide_node::{WIDTH, WideNode};
@@ -101,9 +101,10 @@ fn splits(left: &[f32; WIDTH], right: &[f32; WIDTH]) -> [f32; WIDTH] {
 }
 
 impl Costs {
-    /// The costs of every node of `bvh` (not empty), children before parents.
-    fn new(bvh: &Bvh) -> Costs {
-        let n = bvh.nodes.len();
+    /// The costs of every node of the binary tree `nodes` (not empty), children before
+    /// parents.
+    fn new(nodes: &[BvhNode]) -> Costs {
+        let n = nodes.len();
         // Zeroed huge-page mappings from 2 MiB on (the costs are 17 MB at 1M
         // triangles, where `vec!`'s pages took a fault per 4 KiB, or a `memset` when
         // reused), written through plain slices: a `HugeVec`'s every access looks at its
@@ -116,7 +117,7 @@ impl Costs {
         let cost: &mut [[f32; WIDTH]] = cost_v.as_mut_slice();
         // Children follow their parent: reverse order meets them first.
         for b in (0..n).rev() {
-            let node = &bvh.nodes[b];
+            let node = &nodes[b];
             if node.is_leaf() {
                 let bounds = node.bounds();
                 (first[b], count[b]) = (node.offset, node.count);
@@ -149,21 +150,21 @@ impl Costs {
     }
 
     /// [`single`] of interior node `b`.
-    fn single(&self, bvh: &Bvh, b: usize) -> (f32, bool) {
-        let bounds = bvh.nodes[b].bounds();
+    fn single(&self, nodes: &[BvhNode], b: usize) -> (f32, bool) {
+        let bounds = nodes[b].bounds();
         let room = self.flat[b] && encloses(&bounds);
         single(
             bounds.surface_area(),
             self.count[b],
-            self.split(bvh, b, WIDTH).0,
+            self.split(nodes, b, WIDTH).0,
             room,
         )
     }
 
     /// The least cost of interior node `b`'s two children in at most `i` (2 or more)
     /// lanes together, and the lanes of the first child in it (the fewest of equals).
-    fn split(&self, bvh: &Bvh, b: usize, i: usize) -> (f32, usize) {
-        let (left, right) = (b + 1, bvh.nodes[b].offset as usize);
+    fn split(&self, nodes: &[BvhNode], b: usize, i: usize) -> (f32, usize) {
+        let (left, right) = (b + 1, nodes[b].offset as usize);
         let mut best = (f32::INFINITY, 1);
         for k in 1..i {
             let cost = self.cost[left][k - 1] + self.cost[right][i - k - 1];
@@ -176,8 +177,8 @@ impl Costs {
 
     /// Appends to `lanes` the lanes of binary node `b`'s subtree in at most `i` lanes,
     /// at the least cost, in depth-first (slot) order: `(node, leaf)`.
-    fn lanes(&self, bvh: &Bvh, b: usize, i: usize, lanes: &mut Lanes) {
-        if bvh.nodes[b].is_leaf() {
+    fn lanes(&self, nodes: &[BvhNode], b: usize, i: usize, lanes: &mut Lanes) {
+        if nodes[b].is_leaf() {
             lanes.push((b, true));
             return;
         }
@@ -186,12 +187,12 @@ impl Costs {
             .find(|&j| self.cost[b][j - 1] == self.cost[b][i - 1])
             .unwrap_or(i);
         if fewest == 1 {
-            lanes.push((b, self.single(bvh, b).1));
+            lanes.push((b, self.single(nodes, b).1));
             return;
         }
-        let k = self.split(bvh, b, fewest).1;
-        self.lanes(bvh, b + 1, k, lanes);
-        self.lanes(bvh, bvh.nodes[b].offset as usize, fewest - k, lanes);
+        let k = self.split(nodes, b, fewest).1;
+        self.lanes(nodes, b + 1, k, lanes);
+        self.lanes(nodes, nodes[b].offset as usize, fewest - k, lanes);
     }
 
     /// Appends the wide node for binary node `b` (a leaf only at the root) and its
@@ -200,7 +201,7 @@ impl Costs {
     /// order.
     fn node(
         &self,
-        bvh: &Bvh,
+        nodes: &[BvhNode],
         b: usize,
         depth: u32,
         out: &mut HugeVec<WideNode>,
@@ -209,20 +210,20 @@ impl Costs {
         let me = out.len();
         out.push(WideNode::UNUSED);
         let mut lanes = Lanes::new();
-        if bvh.nodes[b].is_leaf() {
+        if nodes[b].is_leaf() {
             lanes.push((b, true));
         } else {
-            let k = self.split(bvh, b, WIDTH).1;
-            self.lanes(bvh, b + 1, k, &mut lanes);
-            self.lanes(bvh, bvh.nodes[b].offset as usize, WIDTH - k, &mut lanes);
+            let k = self.split(nodes, b, WIDTH).1;
+            self.lanes(nodes, b + 1, k, &mut lanes);
+            self.lanes(nodes, nodes[b].offset as usize, WIDTH - k, &mut lanes);
         }
         let mut deepest = depth;
         for (lane, &(k, is_leaf)) in lanes.iter().enumerate() {
-            out[me].set_child_bounds(lane, bvh.nodes[k].bounds());
+            out[me].set_child_bounds(lane, nodes[k].bounds());
             if is_leaf {
                 (out[me].child[lane], out[me].count[lane]) = leaf(self.first[k], self.count[k]);
             } else {
-                let (child, d) = self.node(bvh, k, depth + 1, out, leaf);
+                let (child, d) = self.node(nodes, k, depth + 1, out, leaf);
                 out[me].child[lane] = child;
                 deepest = deepest.max(d);
             }
@@ -240,19 +241,22 @@ pub(super) fn collapse(
     out: &mut HugeVec<WideNode>,
     leaf: &mut impl FnMut(u32, u32) -> (u32, u32),
 ) -> u32 {
-    Costs::new(bvh).node(bvh, 0, 0, out, leaf).1
+    // The nodes as one slice: a `HugeVec`'s every index looks at its backing.
+    let nodes = bvh.nodes.as_slice();
+    Costs::new(nodes).node(nodes, 0, 0, out, leaf).1
 }
 
 /// The least cost the collapse finds for `bvh` (not empty), root node included: the
 /// cost of the tree it makes.
 #[cfg(test)]
 pub(super) fn least_cost(bvh: &Bvh) -> f32 {
-    let c = Costs::new(bvh);
-    let root = &bvh.nodes[0];
+    let nodes = bvh.nodes.as_slice();
+    let c = Costs::new(nodes);
+    let root = &nodes[0];
     let lanes = if root.is_leaf() {
         c.cost[0][0]
     } else {
-        c.split(bvh, 0, WIDTH).0
+        c.split(nodes, 0, WIDTH).0
     };
     NODE_COST * root.bounds().surface_area() + lanes
 }
