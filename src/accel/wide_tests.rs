@@ -1,7 +1,7 @@
 //! Tests of the wide BVH against the binary tree and brute force.
 
 use super::*;
-use crate::accel::leaf::{DEGENERATE, NO_PRIM};
+use crate::accel::leaf::{DEGENERATE, LANES, NO_PRIM, PAIR, leaf_count};
 use crate::accel::triangle::{RayShear, TriangleHit, intersect_triangle_sheared};
 use crate::accel::{BvhNode, Ray, SplitMethod};
 use crate::test_util::Lcg;
@@ -433,6 +433,43 @@ fn exact_ties_on_box_faces_go_to_the_lowest_index() {
     assert!(
         checked > 3000 && ties > 300,
         "{checked} rays checked, {ties} exact ties"
+    );
+}
+
+#[test]
+fn two_group_leaves_give_the_least_hit_over_both_groups() {
+    // Clusters of 5 to 8 triangles, each spanning the same unit cube (the diagonal
+    // and a third vertex inside), far apart: their centroids coincide, so each cluster
+    // is one leaf of two groups (the collapse's largest), whose hit must be the least
+    // (t, index) over both groups, whichever way the closest-hit query tests them.
+    let mut rng = Lcg(33);
+    let h = Vec3::splat(0.5);
+    let mut tris: Vec<Tri> = Vec::new();
+    let mut centres = Vec::new();
+    for k in 0..200 {
+        let c = rng.vec() * 60.0;
+        centres.push(c);
+        for _ in 0..5 + k % 4 {
+            tris.push([c - h, c + h, c + (rng.vec() * 2.0 - Vec3::ONE) * h]);
+        }
+    }
+    let (_, wide) = both(&tris, SplitMethod::SahBinned);
+    // Inner and unused lanes count 0.
+    let counts = wide.nodes.iter().flat_map(|n| n.count);
+    let two_groups = counts.filter(|&c| (LANES + 1..=PAIR).contains(&leaf_count(c).0));
+    assert_eq!(two_groups.count(), 200);
+    let (mut checked, mut hits) = (0, 0);
+    for _ in 0..4000 {
+        let target = centres[(rng.next_f32() * 200.0) as usize % 200] + (rng.vec() - h) * 0.8;
+        let origin = rng.vec() * 80.0 - Vec3::splat(10.0);
+        if let Some(hit) = checked_closest(&wide, &tris, &Ray::new(origin, target - origin)) {
+            checked += 1;
+            hits += hit.is_some() as u32;
+        }
+    }
+    assert!(
+        checked > 3000 && hits > 2000,
+        "{checked} checked, {hits} hits"
     );
 }
 
