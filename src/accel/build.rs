@@ -57,7 +57,11 @@ const SAH_DEPTH_LIMIT: u32 = 32;
 /// Cost of one node visit relative to testing one block of primitives in the SAH; it
 /// only decides whether nodes of `MIN_LEAF + 1 ..= MAX_LEAF` split. On the 100k torus
 /// 0.3-0.5 give the fewest instructions per ray, 1.0 makes larger leaves that cost 4-6%
-/// more of them.
+/// more of them. Swept again in December 2026 (tori, bunny, Sponza, MetalRoughSpheres):
+/// 0.2-0.3 within 0.1% on the tori and 0.8% fewer on Sponza's incoherent rays, 0.7
+/// 0.5-0.7% more; [`MAX_LEAF`] 4 to 6 (leaves of one group) within 0.1% on the tori
+/// and 1.3% fewer on Sponza's incoherent rays at 59.0 rather than 58.4 bytes per
+/// triangle: too little to show in CPU time (see the collapse's `NODE_COST`).
 const TRAVERSAL_COST: f32 = 0.5;
 /// Primitives a leaf tests at once: the wide BVH's leaves are SIMD groups of
 /// [`LANES`] triangles, so a leaf of 5 costs (and holds) as much as one of 8 and the

@@ -22,7 +22,15 @@ use super::wide_node::{WIDTH, WideNode};
 /// Cost of a ray meeting a node's box: its slab test of `WIDTH` children and their
 /// ordering, the unit of the costs below. The figures hardly matter: from leaf 0 to 1
 /// and group 0.8 to 3 (callgrind, torus 100k) single rays and packets cost within 1% of each
-/// other, at 52.8 to 55.3 bytes per triangle.
+/// other, at 52.8 to 55.3 bytes per triangle. Swept again with a node's two nearest
+/// one-group leaves in one 8-lane pass (December 2026, single rays; tori, bunny,
+/// Sponza, MetalRoughSpheres): leaf 0 to 1 and group 1.2 to 3 within 0.5% of these
+/// instructions per ray on the tori (group 1.6: 55.7 bytes per triangle); group 0.9
+/// 1% more (53.7 bytes), 0.6 3-5% more (51.7 bytes). Leaves of one group only (here
+/// and in the build) took 2.7% fewer on Sponza's incoherent rays at 61.1 rather than
+/// 58.4 bytes per triangle, the tori within 0.3%; no CPU time showed on the torus, and
+/// the same instructions saved by the kernel (a two-group leaf in one pass) bought
+/// Sponza none either (2M rays, 8 alternated runs).
 pub(super) const NODE_COST: f32 = 1.0;
 /// Cost of a ray visiting a leaf, beside its groups: the visit and its bookkeeping.
 const LEAF_COST: f32 = 0.3;
