@@ -355,9 +355,21 @@ impl<'a> RayLeaves<'a> {
 // into an FMA by itself, so every clone computes bit-identical results. The any-hit
 // query also has an x86-64-v4 (AVX-512) clone: the same 8-lane code with 32 vector
 // registers spills less (rays example, torus 100k, least CPU time of 7: shadow 202-204
-// -> 195-197 ms). The closest-hit query has none: with its per-group leaf test, primary
-// rays took 492-500 ms in it against 468 in the AVX2 clone (4M rays, least of 5); nor
-// do the packet queries (packets of primary rays 7% slower in a first anchors run).
+// -> 195-197 ms). The closest-hit query has none, nor do the packet queries (packets of
+// primary rays 7% slower in a first anchors run). What made its v4 clone slower (primary
+// rays 463-491 against 424-432 ms, 4M rays, least of 7) was 512-bit instructions, not
+// the 32 registers or mask compares: the clones are tuned for the generic x86-64 CPU,
+// which prefers 512-bit vectors once AVX-512 is on, so LLVM merged adjacent 32-byte
+// stores (the ray's `RayLeaf` constants, the pair test's values) and the sort keys'
+// 64-byte zeroing into zmm stores (10 instructions), which cost the whole clone time
+// (presumably the clock or port 1 that 512-bit instructions take: the loss went with them).
+// Without them (built with `-C target-feature=+prefer-256-bit`, an LLVM tuning flag Rust
+// only takes globally, with a warning) the clone was 2% faster on primary rays (417-430
+// against 425-436 ms) and no faster on incoherent ones, with the leaf test inlined (its
+// constants then stay in registers) or out of line, and with the box test's mask taken
+// by vmovmskps (AVX compares) instead of masked compares and kmov: below the 3% that
+// would pay for the flag. The any-hit v4 clone has no zmm instruction; a change to it
+// should keep it so (`objdump -d` of the clone, `grep zmm`).
 
 /// [`WideBvh::closest_hit`] for the best instruction set the CPU has. (Its inner
 /// functions reach the query through closures: a function with target features
