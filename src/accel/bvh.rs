@@ -499,16 +499,20 @@ mod tests {
         use crate::accel::huge::Backing;
         // 70k primitives fill their `PrimRef`s in parallel (and take a mapping with
         // `Auto`); 500 fill them in order. On one thread the nodes go straight into
-        // the array `backing` says, on more they are built in pieces and copied.
-        let one = rayon::ThreadPoolBuilder::new()
-            .num_threads(1)
-            .build()
-            .unwrap();
+        // the array `backing` says, on more they are built in pieces and copied: two
+        // threads at least, whatever the machine, so that both ways are compared.
+        let pool = |threads| {
+            rayon::ThreadPoolBuilder::new()
+                .num_threads(threads)
+                .build()
+                .unwrap()
+        };
+        let (one, two) = (pool(1), pool(2));
         for n in [70_000, 500] {
             let bounds = random_tri_bounds(n, 7);
-            let want = Bvh::build(&bounds, SplitMethod::SahBinned);
+            let want = two.install(|| Bvh::build(&bounds, SplitMethod::SahBinned));
             for backing in [Backing::Heap, Backing::Mapped] {
-                let b = build_backed(&bounds, SplitMethod::SahBinned, backing);
+                let b = two.install(|| build_backed(&bounds, SplitMethod::SahBinned, backing));
                 assert_eq!(b.nodes, want.nodes, "{n} prims, {backing:?}");
                 assert_eq!(b.prim_indices, want.prim_indices, "{n} prims, {backing:?}");
                 let b = one.install(|| build_backed(&bounds, SplitMethod::SahBinned, backing));

@@ -124,6 +124,27 @@ fn zeroed_arrays_hold_zeros_and_take_their_backing() {
 }
 
 #[test]
+fn truncate_keeps_the_front_on_every_backing() {
+    for n in [10, count_for(MIN_MAPPED_BYTES)] {
+        let items: Vec<Item> = (0..n).map(item).collect();
+        for backing in [Backing::Auto, Backing::Heap, Backing::Mapped] {
+            let mut v = HugeVec::from_slice(&items, backing);
+            v.truncate(n + 1);
+            assert_eq!(
+                v, items,
+                "{n} items, {backing:?}: a longer length keeps all"
+            );
+            v.truncate(n / 2);
+            assert_eq!(v.as_slice(), &items[..n / 2], "{n} items, {backing:?}");
+            // The slots past the new end are free again.
+            v.push(item(n));
+            assert_eq!(v.len(), n / 2 + 1, "{n} items, {backing:?}");
+            assert_eq!(v[n / 2], item(n), "{n} items, {backing:?}");
+        }
+    }
+}
+
+#[test]
 fn a_vec_converts_by_its_size() {
     let small: HugeVec<Item> = (0..100).map(item).collect::<Vec<_>>().into();
     assert!(!small.is_mapped());
