@@ -3,7 +3,8 @@
 //! builds over the anchors bench's torus of about `n` triangles (default 100000) `rounds` times
 //! (default 5) on `threads` threads (default 1) and prints the median and range of the
 //! build time, the tree's SAH cost and a hash of the tree (which changes when the tree
-//! does), then the median and range of its collapse to the 8-wide BVH on the same threads,
+//! does), then the median and range of its collapse to the 8-wide BVH on the same threads
+//! and the wide tree's hash (nodes and leaf groups),
 //! then of both together run on a worker and from the main thread (as the anchors bench);
 //! each with the median of the process's minor page faults per round (Linux; fresh pages
 //! the allocator had to map, which cost about as much as the work on a loaded VM).
@@ -48,9 +49,10 @@ fn main() {
         in_pool(&mut || wide = WideBvh::collapse(&bvh, &tris));
     });
     println!(
-        "collapse {ms}, {faults} page faults, {} wide nodes, {:.1} bytes/tri",
+        "collapse {ms}, {faults} page faults, {} wide nodes, {:.1} bytes/tri, hash {:016x}",
         wide.nodes.len(),
-        wide.bytes() as f64 / tris.len() as f64
+        wide.bytes() as f64 / tris.len() as f64,
+        wide.tree_hash()
     );
     // Both steps as the anchors bench times them (each round's trees dropped in it), on
     // a worker and then from the main thread, as its one-thread and all-threads rows do.

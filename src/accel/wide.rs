@@ -124,6 +124,19 @@ impl WideBvh {
         }
     }
 
+    /// FNV-1a over the bytes of every node and leaf group, 8 at a time: equal for equal
+    /// trees, so a collapse change that alters the wide tree shows.
+    pub fn tree_hash(&self) -> u64 {
+        let nodes: &[u64] = bytemuck::cast_slice(self.nodes.as_slice());
+        let groups: &[u64] = bytemuck::cast_slice(self.leaves.groups.as_slice());
+        nodes
+            .iter()
+            .chain(groups)
+            .fold(0xcbf2_9ce4_8422_2325, |h, &w| {
+                (h ^ w).wrapping_mul(0x0000_0100_0000_01b3)
+            })
+    }
+
     /// Bytes held: nodes, triangles and indices (not the huge-page mappings' unused
     /// room: see [`WideBvh::reserved_bytes`]).
     pub fn bytes(&self) -> usize {
