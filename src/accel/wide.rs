@@ -112,7 +112,10 @@ impl WideBvh {
         let depth = collapse(bvh, &mut nodes, &mut |slot, count| {
             push_leaf(&mut leaves, slot, count, &bvh.prim_indices, positions)
         });
-        nodes.shrink_to_fit();
+        // Not shrunk to fit: a `Vec` of 64-byte-aligned nodes has no `realloc` of its
+        // own (Rust's allocator copies over-aligned memory into a fresh block), so the
+        // shrink copied every node (torus 100k: 1.3 MB; the collapse's page faults
+        // 414 -> 321 without it); the unused tail, about a fifth, is never written.
         WideBvh {
             nodes: nodes.into(),
             leaves: LeafTris {
