@@ -106,12 +106,18 @@ impl WideBvh {
             .filter(|n| n.is_leaf())
             .map(|n| groups_for(n.count as usize))
             .sum();
-        let mut leaves = HugeVec::with_backing(groups, backing);
+        // As many groups as the binary leaves fill: merged leaves may fill fewer, so the
+        // array is cut to what was written.
+        let mut leaves = HugeVec::zeroed(groups, backing);
         let nodes = wide_node_estimate(bvh.nodes.len());
         let mut nodes = HugeVec::with_backing(nodes, backing);
+        let (out, mut next) = (leaves.as_mut_slice(), 0);
         let depth = collapse(bvh, &mut nodes, &mut |slot, count| {
-            push_leaf(&mut leaves, slot, count, &bvh.prim_indices, positions)
+            let lane = push_leaf(out, next, slot, count, &bvh.prim_indices, positions);
+            next += groups_for(count as usize);
+            lane
         });
+        leaves.truncate(next);
         // Not shrunk to fit: a `Vec` of 64-byte-aligned nodes has no `realloc` of its
         // own (Rust's allocator copies over-aligned memory into a fresh block), so the
         // shrink copied every node (torus 100k: 1.3 MB; the collapse's page faults
