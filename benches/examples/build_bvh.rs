@@ -3,10 +3,13 @@
 //! builds over the anchors bench's torus of about `n` triangles (default 100000) `rounds` times
 //! (default 5) on `threads` threads (default 1) and prints the median and range of the
 //! build time, the tree's SAH cost and a hash of the tree (which changes when the tree
-//! does), then the median and range of its collapse to the 8-wide BVH on the same threads,
+//! does), then the median and range of its collapse to the 8-wide BVH on the same threads
+//! and the wide tree's hash (nodes and leaf groups),
 //! then of both together run on a worker and from the main thread (as the anchors bench);
 //! each with the median of the process's minor page faults per round (Linux; fresh pages
-//! the allocator had to map, which cost about as much as the work on a loaded VM).
+//! the allocator had to map, which cost about as much as the work on a loaded VM) and the
+//! least and median CPU time of the thread that did the work (Linux; on a machine shared
+//! with other jobs the wall time counts theirs too).
 
 use std::time::Instant;
 
@@ -28,11 +31,17 @@ fn main() {
         .build_global()
         .expect("a thread pool");
     // Runs `f` on a worker of the pool (from the main thread it would run there, with
-    // the main thread's allocator arena).
-    let in_pool = |f: &mut (dyn FnMut() + Send)| rayon::scope(|_| f());
+    // the main thread's allocator arena); the worker's CPU time in it.
+    let in_pool = |f: &mut (dyn FnMut() + Send)| {
+        rayon::scope(|_| {
+            let start = cpu_ns();
+            f();
+            cpu_ns() - start
+        })
+    };
     let mut bvh = Bvh::default();
     let (ms, faults) = time_rounds(rounds, || {
-        in_pool(&mut || bvh = Bvh::build(&bounds, SplitMethod::SahBinned));
+        in_pool(&mut || bvh = Bvh::build(&bounds, SplitMethod::SahBinned))
     });
     println!(
         "{} triangles, {threads} threads: build {ms}, {faults} page faults, {} nodes, {} leaves, SAH cost {:.3} ({:.3} counting leaves in groups of {LANES}), hash {:016x}",
@@ -45,18 +54,23 @@ fn main() {
     );
     let mut wide = WideBvh::default();
     let (ms, faults) = time_rounds(rounds, || {
-        in_pool(&mut || wide = WideBvh::collapse(&bvh, &tris));
+        in_pool(&mut || wide = WideBvh::collapse(&bvh, &tris))
     });
     println!(
-        "collapse {ms}, {faults} page faults, {} wide nodes, {:.1} bytes/tri",
+        "collapse {ms}, {faults} page faults, {} wide nodes, {:.1} bytes/tri, hash {:016x}",
         wide.nodes.len(),
-        wide.bytes() as f64 / tris.len() as f64
+        wide.bytes() as f64 / tris.len() as f64,
+        wide.tree_hash()
     );
     // Both steps as the anchors bench times them (each round's trees dropped in it), on
     // a worker and then from the main thread, as its one-thread and all-threads rows do.
     let pipeline = || WideBvh::collapse(&Bvh::build(&bounds, SplitMethod::SahBinned), &tris);
     let (worker, worker_faults) = time_rounds(rounds, || in_pool(&mut || drop(pipeline())));
-    let (main, main_faults) = time_rounds(rounds, || drop(pipeline()));
+    let (main, main_faults) = time_rounds(rounds, || {
+        let start = cpu_ns();
+        drop(pipeline());
+        cpu_ns() - start
+    });
     println!(
         "build + collapse: on a worker {worker}, {worker_faults} page faults; from the main thread {main}, {main_faults} page faults"
     );
@@ -74,26 +88,43 @@ fn group_sah_cost(bvh: &Bvh) -> f64 {
     cost / bvh.nodes.first().map_or(1.0, area)
 }
 
-/// Runs `f` `rounds` times; the median and range of its time, and the median of the
+/// Runs `f` `rounds` times (it returns the CPU time it took, in ns); the median and range
+/// of its wall time and the least and median of its CPU time, and the median of the
 /// minor page faults each round took.
-fn time_rounds(rounds: usize, mut f: impl FnMut()) -> (String, u64) {
-    let (mut ms, mut faults) = (Vec::new(), Vec::new());
+fn time_rounds(rounds: usize, mut f: impl FnMut() -> u64) -> (String, u64) {
+    let (mut ms, mut cpu, mut faults) = (Vec::new(), Vec::new(), Vec::new());
     for _ in 0..rounds.max(1) {
         let before = minor_faults();
         let start = Instant::now();
-        f();
+        cpu.push(f() as f64 / 1e6);
         ms.push(start.elapsed().as_secs_f64() * 1e3);
         faults.push(minor_faults() - before);
     }
     ms.sort_by(f64::total_cmp);
+    cpu.sort_by(f64::total_cmp);
     faults.sort_unstable();
     let time = format!(
-        "{:.1} ms median [{:.1}-{:.1}]",
+        "{:.1} ms median [{:.1}-{:.1}] (CPU least {:.2}, median {:.2} ms)",
         ms[ms.len() / 2],
         ms[0],
-        ms[ms.len() - 1]
+        ms[ms.len() - 1],
+        cpu[0],
+        cpu[cpu.len() / 2]
     );
     (time, faults[faults.len() / 2])
+}
+
+/// Nanoseconds this thread has run on a CPU (Linux: its CPU-time clock, read to the
+/// nanosecond, where `/proc/thread-self/schedstat` moves only at scheduler ticks; 0
+/// elsewhere).
+fn cpu_ns() -> u64 {
+    #[cfg(target_os = "linux")]
+    {
+        let t = rustix::time::clock_gettime(rustix::time::ClockId::ThreadCPUTime);
+        t.tv_sec as u64 * 1_000_000_000 + t.tv_nsec as u64
+    }
+    #[cfg(not(target_os = "linux"))]
+    0
 }
 
 /// The process's minor page faults so far (field 10 of `/proc/self/stat`); 0 where

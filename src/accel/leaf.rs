@@ -19,7 +19,7 @@ use multiversion::{inherit_target, multiversion};
 use wide::u32x4;
 
 use super::Ray;
-use super::huge::{HugeSlice, HugeVec};
+use super::huge::HugeSlice;
 use super::triangle::{RayShear, TriangleHit, intersect_triangle_flagged, is_degenerate};
 
 /// Triangles per group. Four beat eight on the 100k torus: the binned-SAH leaves
@@ -132,10 +132,13 @@ pub fn lane_mask(i: usize, count: usize) -> u32 {
 /// How many slots ahead of a leaf [`push_leaf`] prefetches the triangles of.
 const PREFETCH_SLOTS: usize = 16;
 
-/// Appends to `groups` (the [`LeafTris::groups`] being made) the groups of the leaf of
-/// `count` triangles at slot `slot` of `prims`; returns the wide node's `(child, count)`
-/// for it ([`leaf_lane`]). Leaves pushed in slot order keep the groups in the
-/// triangles' order: neighbouring leaves stay close.
+/// Writes to `groups` (the [`LeafTris::groups`] being made), from group `first_group`
+/// on, the [`groups_for`] `count` groups of the leaf of `count` triangles at slot `slot`
+/// of `prims`; returns the wide node's `(child, count)` for it ([`leaf_lane`]). Leaves
+/// written in slot order keep the groups in the triangles' order: neighbouring leaves
+/// stay close. Into a slice made once, not pushed: a `HugeVec::push` per group took ~50
+/// instructions of call and growth checks, a mapped one's ~90 (the slice of the whole
+/// mapping cast again per write).
 ///
 /// Leaves come in slot order, so each call asks the caches for the triangles
 /// `PREFETCH_SLOTS` slots on, which a later call reads: `prims` is in the tree's order,
@@ -143,13 +146,13 @@ const PREFETCH_SLOTS: usize = 16;
 /// 36.5 ms). A clone for SSE, where the prefetch is a safe call.
 #[multiversion(targets("x86_64+sse4.2"))]
 pub fn push_leaf(
-    groups: &mut HugeVec<TriGroup>,
+    groups: &mut [TriGroup],
+    first_group: usize,
     slot: u32,
     count: u32,
     prims: &[u32],
     positions: &[[Vec3; 3]],
 ) -> (u32, u32) {
-    let first_group = groups.len();
     let (slot, end) = (slot as usize, (slot + count) as usize);
     /// Prefetches both cache lines `tri` may span into every level, in the clone with
     /// the instruction's target feature (nothing in the fallback). A hint: it reads
@@ -176,15 +179,17 @@ pub fn push_leaf(
         }
     }
     let mut degenerate = false;
-    for start in (slot..end).step_by(LANES) {
-        let mut group = TriGroup::PADDING;
+    let out = &mut groups[first_group..first_group + groups_for(count as usize)];
+    for (out, start) in out.iter_mut().zip((slot..end).step_by(LANES)) {
+        // Written in place: a group made in a local was kept in 40 registers and
+        // spilled, then stored a lane at a time.
+        *out = TriGroup::PADDING;
         for k in start..(start + LANES).min(end) {
             let tri @ [a, b, c] = positions[prims[k] as usize];
             degenerate |= is_degenerate(a, b, c);
-            group.set_triangle(k - start, tri);
-            group.prim[k - start] = prims[k];
+            out.set_triangle(k - start, tri);
+            out.prim[k - start] = prims[k];
         }
-        groups.push(group);
     }
     leaf_lane(first_group, count, degenerate)
 }

@@ -2,6 +2,7 @@
 //! helpers of the wide BVH's tests.
 
 use super::*;
+use crate::accel::leaf::TriGroup;
 
 /// The collapse before the costed one: each node takes the largest-area interior
 /// children in place of their parents until it has `WIDTH`; leaves are the binary
@@ -115,11 +116,13 @@ fn reference_leaves(bvh: &Bvh, tris: &[Tri]) -> (Vec<WideNode>, LeafTris) {
         }
     }
     lanes.sort_unstable();
-    let mut groups = HugeVec::new();
+    let mut groups = Vec::new();
     for (slot, i, lane) in lanes {
         let count = nodes[i].count[lane];
+        let first = groups.len();
+        groups.resize(first + groups_for(count as usize), TriGroup::PADDING);
         (nodes[i].child[lane], nodes[i].count[lane]) =
-            push_leaf(&mut groups, slot, count, &bvh.prim_indices, tris);
+            push_leaf(&mut groups, first, slot, count, &bvh.prim_indices, tris);
     }
     let groups = groups.into();
     (nodes, LeafTris { groups })
