@@ -20,7 +20,7 @@ use wide::u32x4;
 
 use super::Ray;
 use super::huge::HugeSlice;
-use super::triangle::{RayShear, TriangleHit, intersect_triangle_flagged, is_degenerate};
+use super::triangle::{Axis, RayShear, TriangleHit, intersect_triangle_flagged, is_degenerate};
 
 /// Triangles per group. Four beat eight on the 100k torus: the binned-SAH leaves
 /// hold 3.3 triangles on average (at most 4 there), so eight lanes would mostly pad.
@@ -267,7 +267,9 @@ impl LeafTris {
 /// once per ray, so that the leaf test reads them from here as vectors, where it
 /// spread and spilled them to its stack at every call.
 pub struct RayLeaf {
-    axes: [usize; 3],
+    /// `RayShear`'s kx, ky, kz, as `Axis` so that the leaf test indexes a group's
+    /// rows without bounds checks.
+    axes: [Axis; 3],
     origin: [[f32; PAIR]; 3],
     sx: [f32; PAIR],
     sy: [f32; PAIR],
@@ -283,7 +285,7 @@ impl RayLeaf {
         let o: &[f32; 3] = ray.origin.as_ref();
         RayLeaf {
             axes: [s.kx, s.ky, s.kz],
-            origin: [[o[s.kx]; PAIR], [o[s.ky]; PAIR], [o[s.kz]; PAIR]],
+            origin: [s.kx, s.ky, s.kz].map(|k| [o[k as usize]; PAIR]),
             sx: [s.sx; PAIR],
             sy: [s.sy; PAIR],
             sz: [s.sz; PAIR],
@@ -302,7 +304,7 @@ impl RayLeaf {
     /// Rust never fuses a product and a sum. No branches, so the loop vectorises.
     #[inline(always)]
     pub fn candidates(&self, g: &TriGroup, t_max: f32) -> Option<Candidates> {
-        let [kx, ky, kz] = self.axes;
+        let [kx, ky, kz] = self.axes();
         let [a, b, c] = &g.v;
         let v = [
             [a[kx], a[ky], a[kz]],
@@ -315,7 +317,10 @@ impl RayLeaf {
     /// The sheared axes of the ray (`RayShear`'s kx, ky, kz).
     #[inline(always)]
     pub(super) fn axes(&self) -> [usize; 3] {
-        self.axes
+        // One at a time: an `Axis` read alone keeps its range, where the three read
+        // as one (`map`) were read as an integer of 3 bytes and bounds-checked again.
+        let [kx, ky, kz] = &self.axes;
+        [*kx as usize, *ky as usize, *kz as usize]
     }
 
     /// [`Self::candidates`] over `N` lanes (a multiple of [`LANES`]) of vertices `v`

@@ -28,12 +28,13 @@ pub struct TriangleHit {
 /// Per-ray constants of the watertight test: axis permutation and shear.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct RayShear {
-    /// Permuted axis indices; `kz` is the dominant direction axis.
-    pub kx: usize,
+    /// Permuted axes; `kz` is the dominant direction axis. (`Axis`, not `usize`: an
+    /// array indexed by one needs no bounds check.)
+    pub kx: Axis,
     /// Second permuted axis.
-    pub ky: usize,
+    pub ky: Axis,
     /// Dominant axis of the direction.
-    pub kz: usize,
+    pub kz: Axis,
     /// Shear of x: `dir[kx] / dir[kz]`.
     pub sx: f32,
     /// Shear of y: `dir[ky] / dir[kz]`.
@@ -63,29 +64,31 @@ impl RayShear {
     fn with_scale(ray: &Ray, scale: impl FnOnce(f32, usize) -> f32) -> RayShear {
         let a = ray.dir.abs();
         let kz = if a.x >= a.y && a.x >= a.z {
-            0
+            Axis::X
         } else if a.y >= a.z {
-            1
+            Axis::Y
         } else {
-            2
+            Axis::Z
         };
         // The direction in place (the ray's memory), indexed without glam's
         // per-component `match` (a chain of branches) and without a copy of it on the
         // stack to index.
         let d: &[f32; 3] = ray.dir.as_ref();
-        let dz = d[kz];
+        let dz = d[kz as usize];
         // x and y follow z cyclically, swapped when dir[kz] is negative so that the
         // winding (sign of the edge functions) stays consistent with the original
         // orientation when looking down -z: a table of the six cases, where `(kz + 1) %
         // 3` and the swap were a chain of compares and conditional moves.
-        let [kx, ky] = AXES[kz][(dz < 0.0) as usize];
+        // (Entries of type `Axis`: the compiler knows each below 3, where `usize`
+        // entries cost two bounds checks per ray.)
+        let [kx, ky] = AXES[kz as usize][(dz < 0.0) as usize];
         RayShear {
             kx,
             ky,
             kz,
-            sx: d[kx] / dz,
-            sy: d[ky] / dz,
-            sz: scale(dz, kz),
+            sx: d[kx as usize] / dz,
+            sy: d[ky as usize] / dz,
+            sz: scale(dz, kz as usize),
             dir: ray.dir,
         }
     }
@@ -93,7 +96,36 @@ impl RayShear {
 
 /// `[kx, ky]` of `RayShear` for the dominant axis `kz`: `[kz][0]` the next two axes
 /// cyclically, `[kz][1]` (a negative `dir[kz]`) the same swapped.
-const AXES: [[[usize; 2]; 2]; 3] = [[[1, 2], [2, 1]], [[2, 0], [0, 2]], [[0, 1], [1, 0]]];
+const AXES: [[[Axis; 2]; 2]; 3] = {
+    use Axis::{X, Y, Z};
+    [[[Y, Z], [Z, Y]], [[Z, X], [X, Z]], [[X, Y], [Y, X]]]
+};
+
+/// An axis index (0, 1, 2) as a type of three values: an array of three indexed by
+/// one (`axis as usize`) needs no bounds check, where a `usize` read from memory (a
+/// table, a ray's constants) took a compare and a branch per index.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[repr(u8)]
+pub enum Axis {
+    /// x, index 0.
+    X = 0,
+    /// y, index 1.
+    Y = 1,
+    /// z, index 2.
+    Z = 2,
+}
+
+impl Axis {
+    /// The axis of index `k` (below 3; z for any larger).
+    #[inline(always)]
+    pub fn of(k: usize) -> Axis {
+        match k {
+            0 => Axis::X,
+            1 => Axis::Y,
+            _ => Axis::Z,
+        }
+    }
+}
 
 /// Watertight ray/triangle test; hits both windings with `t` in (0, t_max).
 pub fn intersect_triangle(
@@ -134,7 +166,7 @@ pub(super) fn intersect_triangle_flagged(
     let a = (v0 - ray_origin).to_array();
     let b = (v1 - ray_origin).to_array();
     let c = (v2 - ray_origin).to_array();
-    let (kx, ky, kz) = (s.kx, s.ky, s.kz);
+    let (kx, ky, kz) = (s.kx as usize, s.ky as usize, s.kz as usize);
 
     // Shear and scale the vertices into ray space (x and y only for now).
     let ax = a[kx] - s.sx * a[kz];
@@ -261,13 +293,14 @@ fn t_error(
 ) -> f64 {
     let gamma = |n| gamma_for(n, unit);
     let [ax, ay, bx, by, cx, cy] = sheared.map(f64::abs);
+    let (kx, ky, kz) = (s.kx as usize, s.ky as usize, s.kz as usize);
     let (sx, sy) = (
-        f64::from(s.dir[s.kx]) / f64::from(s.dir[s.kz]),
-        f64::from(s.dir[s.ky]) / f64::from(s.dir[s.kz]),
+        f64::from(s.dir[kx]) / f64::from(s.dir[kz]),
+        f64::from(s.dir[ky]) / f64::from(s.dir[kz]),
     );
     // Errors of the sheared coordinates: the subtraction from the origin, the shear product, the difference.
-    let ex = rel.map(|p| gamma(5) * (p[s.kx].abs() + (sx * p[s.kz]).abs()));
-    let ey = rel.map(|p| gamma(5) * (p[s.ky].abs() + (sy * p[s.kz]).abs()));
+    let ex = rel.map(|p| gamma(5) * (p[kx].abs() + (sx * p[kz]).abs()));
+    let ey = rel.map(|p| gamma(5) * (p[ky].abs() + (sy * p[kz]).abs()));
     let g2 = gamma(2);
     // Errors of the edge functions u = cx by - cy bx, v = ax cy - ay cx, w = bx ay - by ax.
     let eu = cx * ey[1] + by * ex[2] + cy * ex[1] + bx * ey[2] + g2 * (cx * by + cy * bx);
@@ -285,13 +318,13 @@ fn t_error(
 #[cold]
 fn t_in_f64(s: &RayShear, origin: Vec3, v: [Vec3; 3]) -> Option<f64> {
     let d = s.dir.as_dvec3().to_array();
-    let (sx, sy, sz) = (d[s.kx] / d[s.kz], d[s.ky] / d[s.kz], 1.0 / d[s.kz]);
+    let (kx, ky, kz) = (s.kx as usize, s.ky as usize, s.kz as usize);
+    let (sx, sy, sz) = (d[kx] / d[kz], d[ky] / d[kz], 1.0 / d[kz]);
     let rel = v.map(|p| (p.as_dvec3() - origin.as_dvec3()).to_array());
-    let [[ax, ay], [bx, by], [cx, cy]] =
-        rel.map(|p| [p[s.kx] - sx * p[s.kz], p[s.ky] - sy * p[s.kz]]);
+    let [[ax, ay], [bx, by], [cx, cy]] = rel.map(|p| [p[kx] - sx * p[kz], p[ky] - sy * p[kz]]);
     let e = [cx * by - cy * bx, ax * cy - ay * cx, bx * ay - by * ax];
     let inv_det = 1.0 / (e[0] + e[1] + e[2]);
-    let z = rel.map(|p| sz * p[s.kz]);
+    let z = rel.map(|p| sz * p[kz]);
     let t = (e[0] * z[0] + e[1] * z[1] + e[2] * z[2]) * inv_det;
     let unit = f64::EPSILON * 0.5;
     let bound = t_error(s, rel, [ax, ay, bx, by, cx, cy], e, z, t, inv_det, unit);
@@ -304,7 +337,7 @@ fn t_in_f64(s: &RayShear, origin: Vec3, v: [Vec3; 3]) -> Option<f64> {
 #[cfg(test)]
 pub(super) fn t_and_error(s: &RayShear, origin: Vec3, v: [Vec3; 3]) -> Option<(f32, f64)> {
     let [a, b, c] = v.map(|p| (p - origin).to_array());
-    let (kx, ky, kz) = (s.kx, s.ky, s.kz);
+    let (kx, ky, kz) = (s.kx as usize, s.ky as usize, s.kz as usize);
     let [ax, ay, bx, by, cx, cy] = [
         a[kx] - s.sx * a[kz],
         a[ky] - s.sy * a[kz],
@@ -531,13 +564,15 @@ mod tests {
     fn axes_follow_the_dominant_axis_cyclically_swapped_when_negative() {
         for kz in 0..3 {
             let (kx, ky) = ((kz + 1) % 3, (kz + 2) % 3);
-            assert_eq!(AXES[kz], [[kx, ky], [ky, kx]], "{kz}");
+            let axes = AXES[kz].map(|pair| pair.map(|k| k as usize));
+            assert_eq!(axes, [[kx, ky], [ky, kx]], "{kz}");
             for sign in [1.0, -1.0] {
                 let mut dir = Vec3::splat(0.25);
                 dir[kz] = sign;
                 let s = RayShear::new(&Ray::new(Vec3::ZERO, dir));
                 let want = if sign < 0.0 { (ky, kx) } else { (kx, ky) };
-                assert_eq!((s.kx, s.ky, s.kz), (want.0, want.1, kz), "{dir}");
+                let got = (s.kx as usize, s.ky as usize, s.kz as usize);
+                assert_eq!(got, (want.0, want.1, kz), "{dir}");
             }
         }
     }

@@ -82,7 +82,7 @@ impl ClosestLeaves<'_> {
         mut test: impl FnMut(&RayLeaves, &mut Best, usize, &TriGroup, bool, &mut f32),
     ) -> bool {
         let (count, degenerate) = leaf_count(count);
-        let groups = &self.leaves.wide.leaves.groups[group..group + groups_for(count)];
+        let groups = &self.leaves.groups[group..group + groups_for(count)];
         for (i, g) in groups.iter().enumerate() {
             let index = (group + i) * LANES;
             test(&self.leaves, &mut self.best, index, g, degenerate, t_max);
@@ -96,7 +96,7 @@ impl RayLeaves<'_> {
     /// 8-lane pass (`RayLeaf::closest_pair`), as [`Self::closest`] tests one.
     #[inline(always)]
     pub(super) fn closest_pair(&self, best: &mut Best, pair: [usize; 2], t_max: &mut f32) {
-        let groups = &self.wide.leaves.groups;
+        let groups = self.groups;
         let g = [&groups[pair[0]], &groups[pair[1]]];
         let Some(mut lanes) = self.pre.closest_pair(g, best.bound) else {
             return;

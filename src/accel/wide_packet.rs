@@ -33,7 +33,7 @@ use super::bvh::MAX_DEPTH;
 use super::leaf::{Decided, LANES, LaneValues, TriGroup, groups_for, leaf_count};
 use super::ray_lanes::Lanes;
 use super::segment_box::SegmentBox;
-use super::triangle::{RayShear, TriangleHit, intersect_triangle_flagged};
+use super::triangle::{Axis, RayShear, TriangleHit, intersect_triangle_flagged};
 use super::wide_node::{EMPTY, WIDTH, WideNode, leaf_lanes};
 use super::wide_query::three_ulps_up;
 use super::{BOX_MARGIN, HitLanes, RayLanes, WideBvh};
@@ -188,6 +188,7 @@ impl PacketRays {
     fn scalar(&self, s: &Shear, r: usize) -> (RayShear, Vec3) {
         let [kx, ky, kz] = s.axes;
         let lane = |v: &[Lanes; 3]| Vec3::new(v[0][r], v[1][r], v[2][r]);
+        let [kx, ky, kz] = [kx, ky, kz].map(Axis::of);
         let shear = RayShear {
             kx,
             ky,
