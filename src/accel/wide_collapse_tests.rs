@@ -300,3 +300,20 @@ fn the_walls_of_a_room_keep_a_flat_leaf_each() {
         }
     }
 }
+
+#[test]
+fn the_tree_hash_tells_trees_apart_by_any_node_or_leaf_byte() {
+    let tris = random_tris(3000, 21);
+    let (bvh, wide) = both(&tris, SplitMethod::SahBinned);
+    let again = WideBvh::collapse(&bvh, &tris);
+    assert_eq!(wide.tree_hash(), again.tree_hash());
+    let mut moved = again.clone();
+    moved.nodes.modify(|n| n[0].bounds[4][0] += 1e-3);
+    assert_ne!(moved.tree_hash(), wide.tree_hash());
+    let mut moved = again;
+    moved.leaves.groups.modify(|g| {
+        let last = g.len() - 1;
+        bytemuck::bytes_of_mut(&mut g[last])[0] ^= 1;
+    });
+    assert_ne!(moved.tree_hash(), wide.tree_hash());
+}
