@@ -15,7 +15,7 @@ use std::time::Instant;
 
 use glint::accel::leaf::LANES;
 use glint::accel::{Aabb, Bvh, SplitMethod, WideBvh};
-use glint_bench::displaced_torus;
+use glint_bench::{displaced_torus, thread_cpu_ns};
 
 fn main() {
     let arg = |i: usize, default: usize| {
@@ -34,9 +34,9 @@ fn main() {
     // the main thread's allocator arena); the worker's CPU time in it.
     let in_pool = |f: &mut (dyn FnMut() + Send)| {
         rayon::scope(|_| {
-            let start = cpu_ns();
+            let start = thread_cpu_ns();
             f();
-            cpu_ns() - start
+            thread_cpu_ns() - start
         })
     };
     let mut bvh = Bvh::default();
@@ -67,9 +67,9 @@ fn main() {
     let pipeline = || WideBvh::collapse(&Bvh::build(&bounds, SplitMethod::SahBinned), &tris);
     let (worker, worker_faults) = time_rounds(rounds, || in_pool(&mut || drop(pipeline())));
     let (main, main_faults) = time_rounds(rounds, || {
-        let start = cpu_ns();
+        let start = thread_cpu_ns();
         drop(pipeline());
-        cpu_ns() - start
+        thread_cpu_ns() - start
     });
     println!(
         "build + collapse: on a worker {worker}, {worker_faults} page faults; from the main thread {main}, {main_faults} page faults"
@@ -112,19 +112,6 @@ fn time_rounds(rounds: usize, mut f: impl FnMut() -> u64) -> (String, u64) {
         cpu[cpu.len() / 2]
     );
     (time, faults[faults.len() / 2])
-}
-
-/// Nanoseconds this thread has run on a CPU (Linux: its CPU-time clock, read to the
-/// nanosecond, where `/proc/thread-self/schedstat` moves only at scheduler ticks; 0
-/// elsewhere).
-fn cpu_ns() -> u64 {
-    #[cfg(target_os = "linux")]
-    {
-        let t = rustix::time::clock_gettime(rustix::time::ClockId::ThreadCPUTime);
-        t.tv_sec as u64 * 1_000_000_000 + t.tv_nsec as u64
-    }
-    #[cfg(not(target_os = "linux"))]
-    0
 }
 
 /// The process's minor page faults so far (field 10 of `/proc/self/stat`); 0 where

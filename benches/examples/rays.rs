@@ -11,6 +11,7 @@ use std::hint::black_box;
 use glint::accel::{PACKET, Ray, WideBvh};
 use glint_bench::{
     View, displaced_torus, glint_wide, glint_wide_hits, incoherent_rays, primary_rays, shadow_rays,
+    thread_cpu_ns,
 };
 
 /// The queries the anchors bench times for glint: any-hit up to t = 1 for
@@ -70,9 +71,9 @@ fn main() {
         let mut ms = vec![Vec::new(); sets.len()];
         for _ in 0..repeat {
             for (k, (name, rays)) in sets.iter().enumerate() {
-                let start = cpu_ns();
+                let start = thread_cpu_ns();
                 black_box(trace_rays(&wide, rays, *name == "shadow"));
-                ms[k].push((cpu_ns() - start) as f64 * 1e-6);
+                ms[k].push((thread_cpu_ns() - start) as f64 * 1e-6);
             }
         }
         for (k, (name, _)) in sets.iter().enumerate() {
@@ -89,14 +90,4 @@ fn main() {
         tris.len(),
         wide.bytes() as f64 / tris.len() as f64
     );
-}
-
-/// Nanoseconds this thread has run on a CPU (Linux: the first field of
-/// /proc/thread-self/schedstat).
-fn cpu_ns() -> u64 {
-    let stat = std::fs::read_to_string("/proc/thread-self/schedstat").expect("schedstat");
-    stat.split_whitespace()
-        .next()
-        .and_then(|n| n.parse().ok())
-        .expect("schedstat's first field")
 }
