@@ -46,6 +46,12 @@ pub struct RayShear {
 }
 
 impl RayShear {
+    /// `kx`, `ky`, `kz` as indices (each `Axis` read alone: no bounds checks).
+    #[inline(always)]
+    pub fn indices(&self) -> [usize; 3] {
+        [self.kx as usize, self.ky as usize, self.kz as usize]
+    }
+
     /// Precomputes the permutation and shear for `ray` (once per ray).
     pub fn new(ray: &Ray) -> RayShear {
         RayShear::with_scale(ray, |dz, _| 1.0 / dz)
@@ -79,8 +85,7 @@ impl RayShear {
         // winding (sign of the edge functions) stays consistent with the original
         // orientation when looking down -z: a table of the six cases, where `(kz + 1) %
         // 3` and the swap were a chain of compares and conditional moves.
-        // (Entries of type `Axis`: the compiler knows each below 3, where `usize`
-        // entries cost two bounds checks per ray.)
+        // (`Axis` entries: no bounds checks, where `usize` ones took two per ray.)
         let [kx, ky] = AXES[kz as usize][(dz < 0.0) as usize];
         RayShear {
             kx,
@@ -166,7 +171,7 @@ pub(super) fn intersect_triangle_flagged(
     let a = (v0 - ray_origin).to_array();
     let b = (v1 - ray_origin).to_array();
     let c = (v2 - ray_origin).to_array();
-    let (kx, ky, kz) = (s.kx as usize, s.ky as usize, s.kz as usize);
+    let [kx, ky, kz] = s.indices();
 
     // Shear and scale the vertices into ray space (x and y only for now).
     let ax = a[kx] - s.sx * a[kz];
@@ -293,7 +298,7 @@ fn t_error(
 ) -> f64 {
     let gamma = |n| gamma_for(n, unit);
     let [ax, ay, bx, by, cx, cy] = sheared.map(f64::abs);
-    let (kx, ky, kz) = (s.kx as usize, s.ky as usize, s.kz as usize);
+    let [kx, ky, kz] = s.indices();
     let (sx, sy) = (
         f64::from(s.dir[kx]) / f64::from(s.dir[kz]),
         f64::from(s.dir[ky]) / f64::from(s.dir[kz]),
@@ -318,7 +323,7 @@ fn t_error(
 #[cold]
 fn t_in_f64(s: &RayShear, origin: Vec3, v: [Vec3; 3]) -> Option<f64> {
     let d = s.dir.as_dvec3().to_array();
-    let (kx, ky, kz) = (s.kx as usize, s.ky as usize, s.kz as usize);
+    let [kx, ky, kz] = s.indices();
     let (sx, sy, sz) = (d[kx] / d[kz], d[ky] / d[kz], 1.0 / d[kz]);
     let rel = v.map(|p| (p.as_dvec3() - origin.as_dvec3()).to_array());
     let [[ax, ay], [bx, by], [cx, cy]] = rel.map(|p| [p[kx] - sx * p[kz], p[ky] - sy * p[kz]]);
@@ -337,7 +342,7 @@ fn t_in_f64(s: &RayShear, origin: Vec3, v: [Vec3; 3]) -> Option<f64> {
 #[cfg(test)]
 pub(super) fn t_and_error(s: &RayShear, origin: Vec3, v: [Vec3; 3]) -> Option<(f32, f64)> {
     let [a, b, c] = v.map(|p| (p - origin).to_array());
-    let (kx, ky, kz) = (s.kx as usize, s.ky as usize, s.kz as usize);
+    let [kx, ky, kz] = s.indices();
     let [ax, ay, bx, by, cx, cy] = [
         a[kx] - s.sx * a[kz],
         a[ky] - s.sy * a[kz],
@@ -571,8 +576,7 @@ mod tests {
                 dir[kz] = sign;
                 let s = RayShear::new(&Ray::new(Vec3::ZERO, dir));
                 let want = if sign < 0.0 { (ky, kx) } else { (kx, ky) };
-                let got = (s.kx as usize, s.ky as usize, s.kz as usize);
-                assert_eq!(got, (want.0, want.1, kz), "{dir}");
+                assert_eq!(s.indices(), [want.0, want.1, kz], "{dir}");
             }
         }
     }
