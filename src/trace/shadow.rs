@@ -15,6 +15,7 @@
 
 use glam::Vec3;
 use rayon::prelude::*;
+use wide::u32x8;
 
 use crate::accel::{PACKET, Ray, RayLanes};
 
@@ -354,12 +355,19 @@ impl ShadowQueue {
 /// changes nothing, not even a -0).
 #[inline(always)]
 fn arrived_lanes(packet: &ShadowPacket, blocked: u32) -> [[f32; PACKET]; 3] {
+    // Bit masks over whole vectors: a blocked lane's bits cleared (+0), an empty lane's
+    // sign bit alone (-0). Selects lane by lane cost about 110 instructions a packet,
+    // the compiler gathering each lane's three channels (Cornell direct: 357 -> 350
+    // instructions per ray).
+    let bit = u32x8::from([1, 2, 4, 8, 16, 32, 64, 128]);
+    // All ones in the lanes of `mask`.
+    let lanes = |mask: u32| (u32x8::splat(mask) & bit).simd_eq(bit);
     let active = packet.rays.active;
+    let keep = lanes(active & !blocked);
+    let empty = !lanes(active) & u32x8::splat(0x8000_0000);
     packet.contribution.map(|c| {
-        std::array::from_fn(|r| {
-            let v = if blocked & (1 << r) != 0 { 0.0 } else { c[r] };
-            if active & (1 << r) != 0 { v } else { -0.0 }
-        })
+        let c = u32x8::from(c.map(f32::to_bits));
+        ((c & keep) | empty).to_array().map(f32::from_bits)
     })
 }
 
