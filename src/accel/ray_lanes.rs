@@ -28,6 +28,20 @@ impl RayLanes {
     #[inline(always)]
     pub fn from_rays(rays: &[Ray]) -> RayLanes {
         assert!(rays.len() <= PACKET, "a packet of {} rays", rays.len());
+        // A full packet (the render's camera packets) as one transposition, which the
+        // compiler vectorizes: ray by ray, it moved each float alone, 62 instructions a
+        // packet more (Cornell direct: about 2 per ray).
+        if let Ok(full) = <&[Ray; PACKET]>::try_from(rays) {
+            let (o, d) = (
+                full.map(|r| r.origin.to_array()),
+                full.map(|r| r.dir.to_array()),
+            );
+            return RayLanes {
+                origin: std::array::from_fn(|a| std::array::from_fn(|r| o[r][a])),
+                dir: std::array::from_fn(|a| std::array::from_fn(|r| d[r][a])),
+                active: (1 << PACKET) - 1,
+            };
+        }
         let mut lanes = RayLanes::default();
         for (r, ray) in rays.iter().enumerate() {
             lanes.set(r, ray);

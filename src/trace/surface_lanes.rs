@@ -18,9 +18,11 @@ use crate::trace::geometry::SceneGeometry;
 type Lanes = [f32; PACKET];
 
 /// What a flattened triangle's shading point is made of, one hit per lane (lanes
-/// without such a hit hold zeros: a degenerate triangle, computed and not read).
+/// without such a hit hold what an earlier packet left there, or zeros: computed and
+/// not read). One per task, reused packet by packet: zeroed per packet, it cost 76
+/// instructions a packet (Cornell direct: about 2 per ray).
 #[derive(Default)]
-struct TriangleLanes {
+pub(super) struct TriangleLanes {
     /// Vertex `k`'s coordinate `a` in `v[k][a]`.
     v: [[Lanes; 3]; 3],
     /// Vertex normals, as `v` (read only when interpolating).
@@ -44,12 +46,14 @@ pub(super) struct SurfaceLanes {
 }
 
 /// `surface_at` of each hit of `hits` (up to [`PACKET`]) on the ray of the same lane
-/// in `rays`, into lane of the same index of `out` (its hit bits: the hits).
+/// in `rays`, into lane of the same index of `out` (its hit bits: the hits), with
+/// `lanes` for the triangles' lanes (overwritten where there is a hit).
 pub(super) fn surfaces_at(
     geometry: &SceneGeometry,
     rays: &[Ray],
     hits: &PacketSceneHits,
     interpolate_normals: bool,
+    lanes: &mut TriangleLanes,
     out: &mut SurfaceBlock,
 ) {
     assert!(rays.len() <= PACKET);
@@ -57,10 +61,7 @@ pub(super) fn surfaces_at(
     let flattened = flat.found & ((1 << rays.len()) - 1);
     // The weights whole, as the packet query kept them (lanes without a hit hold
     // junk, computed and not read).
-    let mut lanes = TriangleLanes {
-        bary: flat.bary,
-        ..TriangleLanes::default()
-    };
+    lanes.bary = flat.bary;
     let mut left = flattened;
     while left != 0 {
         let j = left.trailing_zeros() as usize;
@@ -94,7 +95,7 @@ pub(super) fn surfaces_at(
     }
     out.hit = flattened;
     if flattened != 0 {
-        triangle_surfaces(&lanes, interpolate_normals, &mut out.lanes);
+        triangle_surfaces(lanes, interpolate_normals, &mut out.lanes);
     }
     // Hits of other kinds after the flattened triangles' lanes, which are written whole.
     for &(j, h) in &hits.others {

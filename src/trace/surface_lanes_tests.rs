@@ -140,6 +140,7 @@ fn lanes_give_surface_at_bit_for_bit() {
     let g = geometry(&mut rng);
     // One block for every packet: each call must overwrite what the last one left.
     let mut out = SurfaceBlock::default();
+    let mut scratch = TriangleLanes::default();
     for round in 0..4000 {
         // Every packet length, front- and back-facing rays (random directions).
         let len = 1 + round % PACKET;
@@ -149,7 +150,7 @@ fn lanes_give_surface_at_bit_for_bit() {
         let hits: Vec<Option<Hit>> = (0..len).map(|_| hit(&mut rng, &g)).collect();
         for interpolate in [false, true] {
             let lanes = PacketSceneHits::from_hits(&hits);
-            surfaces_at(&g, &rays, &lanes, interpolate, &mut out);
+            surfaces_at(&g, &rays, &lanes, interpolate, &mut scratch, &mut out);
             for (j, (ray, hit)) in rays.iter().zip(&hits).enumerate() {
                 let want = hit.map(|h| surface_at(&g, ray, &h, interpolate));
                 assert_eq!(bits(&out.get(j)), bits(&want), "{hit:?} on {ray:?}");

@@ -20,7 +20,7 @@ use super::plan::RenderPlan;
 use super::shade_lanes::{LaneModel, shade_chunks_in_lanes};
 pub use super::shadow::{CHUNK, ShadowPacket, ShadowPackets, ShadowQueue, ShadowRay};
 use super::surface::{SHADOW_EPSILON, Surface, offset_ray_origin_towards, surface_at};
-use super::surface_lanes::surfaces_at;
+use super::surface_lanes::{TriangleLanes, surfaces_at};
 use super::surface_queue::SurfaceBlock;
 pub use super::surface_queue::SurfaceQueue;
 use crate::accel::Ray;
@@ -195,17 +195,21 @@ fn closest_hits_in_packets(
         .par_iter_mut()
         .zip(rays.par_chunks(PACKET))
         .with_min_len(CHUNK / PACKET)
-        // One buffer of hits per task, overwritten packet by packet.
-        .for_each_init(PacketSceneHits::default, |hits, (surfaces, rays)| {
-            // Only the packet's rays are copied (the rest stay zero, never read).
-            let mut packet = [Ray::new(Vec3::ZERO, Vec3::ZERO); PACKET];
-            for (p, q) in packet.iter_mut().zip(rays) {
-                *p = q.ray;
-            }
-            let n = rays.len();
-            geometry.intersect_packet_lanes_into(&packet[..n], f32::INFINITY, hits);
-            surfaces_at(geometry, &packet[..n], hits, interpolate, surfaces);
-        });
+        // One buffer of hits and one of triangle lanes per task, overwritten packet by
+        // packet.
+        .for_each_init(
+            || (PacketSceneHits::default(), TriangleLanes::default()),
+            |(hits, lanes), (surfaces, rays)| {
+                // Only the packet's rays are copied (the rest stay zero, never read).
+                let mut packet = [Ray::new(Vec3::ZERO, Vec3::ZERO); PACKET];
+                for (p, q) in packet.iter_mut().zip(rays) {
+                    *p = q.ray;
+                }
+                let n = rays.len();
+                geometry.intersect_packet_lanes_into(&packet[..n], f32::INFINITY, hits);
+                surfaces_at(geometry, &packet[..n], hits, interpolate, lanes, surfaces);
+            },
+        );
 }
 
 /// Finds each ray's closest hit and builds its shading point; with a [`TraceLog`], also
