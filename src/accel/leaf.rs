@@ -118,6 +118,14 @@ pub fn leaf_count(count: u32) -> (usize, bool) {
     ((count & !DEGENERATE) as usize, count & DEGENERATE != 0)
 }
 
+/// Whether a leaf lane's `count` ([`leaf_lane`]) is a leaf of one group without
+/// [`DEGENERATE`]: one compare, as the flag (the top bit) puts the count minus one past
+/// `LANES`.
+#[inline(always)]
+pub fn one_plain_group(count: u32) -> bool {
+    count.wrapping_sub(1) < LANES as u32
+}
+
 /// Mask of the lanes holding triangles in group `i` of a leaf of `count` triangles.
 #[inline(always)]
 pub fn lane_mask(i: usize, count: usize) -> u32 {

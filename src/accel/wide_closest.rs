@@ -109,15 +109,25 @@ impl RayLeaves<'_> {
             let index = pair[lane / LANES] * LANES + lane % LANES;
             best.offer(index, prims[lane], &h, t_max);
         }
-        let mut scalar = lanes.scalar;
-        while scalar != 0 {
-            let lane = scalar.trailing_zeros() as usize;
-            scalar &= scalar - 1;
-            let (k, l) = (lane / LANES, lane % LANES);
-            if let Some(h) = scalar_lane(g[k], l, self.ray, best.bound, false) {
-                best.offer(pair[k] * LANES + l, g[k].prim[l], &h, t_max);
-            }
+        if lanes.scalar != 0 {
+            self.pair_scalar_lanes(best, pair[0], pair[1], lanes.scalar, t_max);
         }
+    }
+
+    /// [`Self::scalar_lanes`] of the lanes of `scalar` in a pair's 8-lane pass: bits
+    /// `0..LANES` of group `g0`, the others of group `g1`, in one call (cold too).
+    #[cold]
+    #[inline(never)]
+    fn pair_scalar_lanes(
+        &self,
+        best: &mut Best,
+        g0: usize,
+        g1: usize,
+        scalar: u32,
+        t_max: &mut f32,
+    ) {
+        self.scalar_lanes(best, g0, scalar, false, t_max);
+        self.scalar_lanes(best, g1, scalar >> LANES, false, t_max);
     }
 
     /// The closest-hit query's test of group `g` (at lane `index` in the leaves, in a
@@ -140,13 +150,31 @@ impl RayLeaves<'_> {
             let h = lanes.hit(lane);
             best.offer(index + lane, g.prim[lane], &h, t_max);
         }
-        let mut scalar = lanes.scalar;
+        if lanes.scalar != 0 {
+            self.scalar_lanes(best, index / LANES, lanes.scalar, degenerate, t_max);
+        }
+    }
+
+    /// The scalar test of the lanes of `scalar` (bits `0..LANES`) of the group at `group`
+    /// in the leaves, each hit offered to `best`: out of line and cold, as few groups
+    /// have such a lane, so that the group tests hold no values across its calls.
+    #[cold]
+    #[inline(never)]
+    fn scalar_lanes(
+        &self,
+        best: &mut Best,
+        group: usize,
+        scalar: u32,
+        degenerate: bool,
+        t_max: &mut f32,
+    ) {
+        let g = &self.groups[group];
+        let mut scalar = scalar & ((1 << LANES) - 1);
         while scalar != 0 {
             let lane = scalar.trailing_zeros() as usize;
             scalar &= scalar - 1;
-            let h = scalar_lane(g, lane, self.ray, best.bound, degenerate);
-            if let Some(h) = h {
-                best.offer(index + lane, g.prim[lane], &h, t_max);
+            if let Some(h) = scalar_lane(g, lane, self.ray, best.bound, degenerate) {
+                best.offer(group * LANES + lane, g.prim[lane], &h, t_max);
             }
         }
     }

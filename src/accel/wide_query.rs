@@ -15,7 +15,7 @@
 use multiversion::target::match_target;
 use multiversion::{inherit_target, multiversion};
 
-use super::leaf::{LANES, RayLeaf, TriGroup, groups_for, leaf_count};
+use super::leaf::{LANES, RayLeaf, TriGroup, groups_for, leaf_count, one_plain_group};
 use super::triangle::{RayShear, TriangleHit};
 use super::wide_node::RayBoxes;
 use super::wide_packet::{PACKET, PacketHits};
@@ -391,7 +391,7 @@ fn closest_hit_dispatched(
     ray: &Ray,
     t_max: f32,
 ) -> Option<(u32, u32, TriangleHit)> {
-    /// The test of a leaf of several groups out of line (but compiled for this clone's
+    /// The test of a leaf of several groups (or one with the degenerate flag) out of line (but compiled for this clone's
     /// instruction set): the traversal's loop, without the leaf test's many values,
     /// then keeps the box test's per-ray constants in registers instead of reloading
     /// them from the stack at every node (with the loop over the groups inlined, the
@@ -423,6 +423,17 @@ fn closest_hit_dispatched(
     ) {
         leaves.closest(best, index, g, degenerate, t_max)
     }
+    /// `group` for a leaf of one group without the degenerate flag (nearly all leaves):
+    /// without the flag's call to `degenerate_lanes` (the scalar lanes' test is out of
+    /// line too, at the end), no value lives across a call, so the test saves two
+    /// registers on entry where `group` saves six (torus 100k, per primary / incoherent
+    /// ray: 1,215 / 1,475 -> 1,188 / 1,442 instructions with the scalar lanes' test out
+    /// of line and the one-compare check in `one`).
+    #[inherit_target]
+    #[inline(never)]
+    fn plain(leaves: &RayLeaves, best: &mut Best, index: usize, g: &TriGroup, t_max: &mut f32) {
+        leaves.closest(best, index, g, false, t_max)
+    }
     /// Prefetches the cache line at `address` into every cache level, in the clones
     /// with the instruction's target feature (a safe call only there; nothing in the
     /// fallback). A hint: it reads nothing and faults on no address.
@@ -449,29 +460,19 @@ fn closest_hit_dispatched(
     fn pair(leaves: &RayLeaves, best: &mut Best, g0: usize, g1: usize, t_max: &mut f32) {
         leaves.closest_pair(best, [g0, g1], t_max)
     }
-    /// The test of a leaf: one group straight to its test: nearly all of them (2.29
-    /// groups per 2.26 leaves, primary rays on the torus), and `leaf`'s loop
-    /// cost a second call (torus 100k, per primary / incoherent ray: 1,401 /
-    /// 1,734 -> 1,331 / 1,636 instructions).
+    /// The test of a leaf: one group without the degenerate flag straight to its test
+    /// (`plain`): nearly all of them (2.29 groups per 2.26 leaves, primary rays on the
+    /// torus), and `leaf`'s loop cost a second call (torus 100k, per primary /
+    /// incoherent ray: 1,401 / 1,734 -> 1,331 / 1,636 instructions).
     #[inherit_target]
     #[inline]
     fn one(leaves: &mut ClosestLeaves, first: usize, count: u32, t_max: &mut f32) -> bool {
-        {
-            let (n, degenerate) = leaf_count(count);
-            if (1..=LANES).contains(&n) {
-                let g = &leaves.leaves.groups[first];
-                group(
-                    &leaves.leaves,
-                    &mut leaves.best,
-                    first * LANES,
-                    g,
-                    degenerate,
-                    t_max,
-                );
-                false
-            } else {
-                leaf(leaves, first, count, t_max)
-            }
+        if one_plain_group(count) {
+            let g = &leaves.leaves.groups[first];
+            plain(&leaves.leaves, &mut leaves.best, first * LANES, g, t_max);
+            false
+        } else {
+            leaf(leaves, first, count, t_max)
         }
     }
     wide.closest_hit_with(
