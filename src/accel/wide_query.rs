@@ -391,11 +391,12 @@ fn closest_hit_dispatched(
     ray: &Ray,
     t_max: f32,
 ) -> Option<(u32, u32, TriangleHit)> {
-    /// The test of a leaf of several groups (or one with the degenerate flag) out of line (but compiled for this clone's
-    /// instruction set): the traversal's loop, without the leaf test's many values,
-    /// then keeps the box test's per-ray constants in registers instead of reloading
-    /// them from the stack at every node (with the loop over the groups inlined, the
-    /// traversal took 110 more instructions per primary ray on the torus).
+    /// The test of a leaf of several groups (or one with the degenerate flag) out of
+    /// line (but compiled for this clone's instruction set): the traversal's loop,
+    /// without the leaf test's many values, then keeps the box test's per-ray
+    /// constants in registers instead of reloading them from the stack at every node
+    /// (with the loop over the groups inlined, the traversal took 110 more
+    /// instructions per primary ray on the torus).
     #[inherit_target]
     #[inline(never)]
     fn leaf(leaves: &mut ClosestLeaves, first: usize, count: u32, t_max: &mut f32) -> bool {
