@@ -453,11 +453,19 @@ impl Sheared {
     /// coordinate makes t NaN, so it may be skipped.
     #[inline(always)]
     fn sizes(&self, abs_sz: f32) -> [f32; 3] {
-        // maxps itself: f32::max would add a NaN check per lane.
-        let max = |m: f32, x: &f32| if m > x.abs() { m } else { x.abs() };
-        let pz = self.rel_z.iter().fold(0.0, max);
-        [pz, self.xy.iter().fold(0.0, max), abs_sz * pz]
+        error_sizes(&self.rel_z, &self.xy, abs_sz)
     }
+}
+
+/// [`Sheared::sizes`] of a triangle with relative z coordinates `rel_z` and sheared
+/// x and y `xy`, for a ray with |sz| `abs_sz`: what [`clear_of_zero`] takes, for the
+/// lanes and for the scalar test alike.
+#[inline(always)]
+pub(super) fn error_sizes(rel_z: &[f32; 3], xy: &[f32; 6], abs_sz: f32) -> [f32; 3] {
+    // maxps itself: f32::max would add a NaN check per lane.
+    let max = |m: f32, x: &f32| if m > x.abs() { m } else { x.abs() };
+    let pz = rel_z.iter().fold(0.0, max);
+    [pz, xy.iter().fold(0.0, max), abs_sz * pz]
 }
 
 /// The prefilter's answer for one triangle test over `N` lanes (a group's triangles

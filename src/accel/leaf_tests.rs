@@ -585,3 +585,21 @@ fn a_pairs_closest_lane_is_the_scalar_tests_least_t_then_prim_over_both_groups()
         "{hits} hits, {second} in the second group, {ties} ties"
     );
 }
+
+/// `one_plain_group` holds exactly for leaves of 1 to `LANES` triangles without the
+/// degenerate flag, as `leaf_count` reads them.
+#[test]
+fn one_plain_group_is_one_group_without_the_flag() {
+    for count in 0..3 * LANES as u32 {
+        for degenerate in [false, true] {
+            let (_, c) = leaf_lane(5, count.max(1), degenerate);
+            let (n, flag) = leaf_count(c);
+            assert_eq!(
+                one_plain_group(c),
+                (1..=LANES).contains(&n) && !flag,
+                "{count} {degenerate}"
+            );
+        }
+    }
+    assert!(!one_plain_group(0));
+}

@@ -150,6 +150,19 @@ mod tests {
         assert_eq!(lanes.lanes().collect::<Vec<_>>(), [0, 1, 2, 3, 4]);
         let back: Vec<Ray> = lanes.lanes().map(|r| lanes.ray(r)).collect();
         assert_eq!(back, rays);
+        // A full packet takes the one-transposition path.
+        let full: Vec<Ray> = (0..PACKET)
+            .map(|i| {
+                Ray::new(
+                    Vec3::new(i as f32, -1.0, 2.0),
+                    Vec3::new(1.0, 0.5, i as f32),
+                )
+            })
+            .collect();
+        let lanes = RayLanes::from_rays(&full);
+        assert_eq!(lanes.active, (1 << PACKET) - 1);
+        let back: Vec<Ray> = lanes.lanes().map(|r| lanes.ray(r)).collect();
+        assert_eq!(back, full);
         let mut holes = RayLanes::default();
         holes.set(6, &rays[2]);
         holes.set(1, &rays[4]);

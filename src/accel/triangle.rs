@@ -11,7 +11,7 @@
 use glam::Vec3;
 
 use super::Ray;
-use super::leaf::clear_of_zero;
+use super::leaf::{clear_of_zero, error_sizes};
 
 /// A ray/triangle hit: parameter `t` and the barycentric weights of v0, v1, v2.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -247,11 +247,12 @@ pub(super) fn intersect_triangle_flagged(
     // without a zero edge function, as there) needs no f64 bound: Cornell direct,
     // whose shadow packets come here per occluded ray, 365 -> 357 instructions per ray.
     if !zero {
-        // `Sheared::sizes`, maxps itself (f32::max would add a NaN check).
-        let max = |m: f32, x: &f32| if m > x.abs() { m } else { x.abs() };
-        let pz = [a[kz], b[kz], c[kz]].iter().fold(0.0, max);
-        let xy = [ax, ay, bx, by, cx, cy].iter().fold(0.0, max);
-        if clear_of_zero(t, det, [pz, xy, s.sz.abs() * pz]) {
+        let sizes = error_sizes(
+            &[a[kz], b[kz], c[kz]],
+            &[ax, ay, bx, by, cx, cy],
+            s.sz.abs(),
+        );
+        if clear_of_zero(t, det, sizes) {
             return Some(hit(t));
         }
     }
