@@ -33,11 +33,19 @@ use crate::sampling::{PackedSlots, SlotLanes};
 // A group's lanes are one shadow packet's.
 const _: () = assert!(LANES == crate::accel::PACKET);
 
-/// What a chunk's groups reuse, neither zeroed nor allocated per group.
+/// What a task's groups reuse, neither zeroed nor allocated per group.
 #[derive(Debug, Default)]
 struct Scratch {
     lanes: HitLanes,
     samples: Vec<SampleLanes>,
+}
+
+/// What a task's chunks reuse: their groups' [`Scratch`] and the chunk's pixels,
+/// [`LANES`] per group.
+#[derive(Debug, Default)]
+struct ChunkScratch {
+    groups: Scratch,
+    pixels: Vec<u32>,
 }
 
 /// `x` clamped to [0, 1], NaN to 0: `sampling::light`'s `unit`, the same comparisons.
@@ -361,35 +369,27 @@ pub(super) fn shade_chunks_in_lanes(
         hits,
         radiance,
         shadow_rays,
-        |c, rays, hits, out, shadows| {
-            let mut scratch = Scratch::default();
+        ChunkScratch::default,
+        |scratch, c, rays, hits, out, shadows| {
+            let ChunkScratch {
+                groups: scratch,
+                pixels,
+            } = scratch;
             // The chunk's pixels, written before its first group: each group's hash
             // loop reads its eight as one vector, which waited on eight fresh stores
-            // when the group wrote them itself. Of the chunk's length and not zeroed first:
-            // a stack array of `CHUNK` zeroed per chunk cost 4,100 instructions a chunk,
-            // an allocation a tenth of that (Cornell direct: about 1 per ray).
-            let n = rays.len().next_multiple_of(LANES);
-            let mut pixels = Vec::with_capacity(n);
+            // when the group wrote them itself. In the task's buffer, not zeroed first:
+            // a stack array of `CHUNK` zeroed per chunk cost 4,100 instructions a chunk.
+            pixels.clear();
             pixels.extend(
                 rays.iter()
                     .map(|q| cx.region.first_pixel.wrapping_add(q.slot)),
             );
-            pixels.resize(n, 0);
+            pixels.resize(rays.len().next_multiple_of(LANES), 0);
             let groups = rays.chunks(LANES).zip(pixels.as_chunks().0);
             let groups = groups.zip(hits).zip(out.chunks_mut(LANES));
             for (g, (((rays, pixels), hits), out)) in groups.enumerate() {
                 let first = c * CHUNK + g * LANES;
-                shade_group(
-                    cx,
-                    model,
-                    first,
-                    rays,
-                    pixels,
-                    hits,
-                    out,
-                    shadows,
-                    &mut scratch,
-                );
+                shade_group(cx, model, first, rays, pixels, hits, out, shadows, scratch);
             }
             hits.iter().map(|b| b.hit.count_ones() as usize).sum()
         },

@@ -342,17 +342,21 @@ fn shade_ray<M: Model>(
     direct
 }
 
-/// Runs `shade(c, rays, hits, radiance, shadows)` on each [`CHUNK`] of rays and their
-/// hits' blocks in parallel, with the chunk's part of `radiance` and its shadow-ray
+/// Runs `shade(scratch, c, rays, hits, radiance, shadows)` on each [`CHUNK`] of rays and
+/// their hits' blocks in parallel, with the chunk's part of `radiance` and its shadow-ray
 /// buffer; returns each chunk's result in order. Both are the last depth's buffers,
 /// refilled so that their allocations are reused. Chunks, not rays, own the shadow-ray
-/// buffers: no allocation per ray, and a deterministic queue.
-pub(super) fn for_each_shading_chunk<T: Send>(
+/// buffers: no allocation per ray, and a deterministic queue. `scratch` is one value
+/// of `init()` per task, reused by the task's chunks.
+pub(super) fn for_each_shading_chunk<T: Send, S>(
     rays: &[QueuedRay],
     hits: &SurfaceQueue,
     radiance: &mut Vec<Vec3>,
     shadow_rays: &mut ShadowQueue,
-    shade: impl Fn(usize, &[QueuedRay], &[SurfaceBlock], &mut [Vec3], &mut ShadowPackets) -> T + Sync,
+    init: impl Fn() -> S + Sync + Send,
+    shade: impl Fn(&mut S, usize, &[QueuedRay], &[SurfaceBlock], &mut [Vec3], &mut ShadowPackets) -> T
+    + Sync
+    + Send,
 ) -> Vec<T> {
     // A chunk's rays are whole blocks.
     const _: () = assert!(CHUNK.is_multiple_of(LANES));
@@ -365,7 +369,9 @@ pub(super) fn for_each_shading_chunk<T: Send>(
         .zip(radiance.par_chunks_mut(CHUNK))
         .zip(chunk_shadows.par_iter_mut())
         .enumerate()
-        .map(|(c, (((rays, hits), out), shadows))| shade(c, rays, hits, out, shadows))
+        .map_init(init, |scratch, (c, (((rays, hits), out), shadows))| {
+            shade(scratch, c, rays, hits, out, shadows)
+        })
         .collect()
 }
 
@@ -385,7 +391,8 @@ pub(super) fn shade_chunks<O: LightObserver, M: Model>(
         hits,
         radiance,
         shadow_rays,
-        |c, rays, hits, out, shadows| {
+        || (),
+        |_, c, rays, hits, out, shadows| {
             let mut observer = O::default();
             for (k, (q, r)) in rays.iter().zip(out).enumerate() {
                 let i = c * CHUNK + k;
