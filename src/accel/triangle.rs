@@ -164,6 +164,19 @@ pub fn intersect_triangle_sheared(
 pub(super) fn intersect_triangle_flagged(
     s: &RayShear,
     ray_origin: Vec3,
+    v: [Vec3; 3],
+    t_max: f32,
+    may_be_degenerate: bool,
+) -> Option<TriangleHit> {
+    intersect_triangle_checked::<true>(s, ray_origin, v, t_max, may_be_degenerate)
+}
+
+/// [`intersect_triangle_flagged`], whose shortcut past the f64 bound on t (`SHORTCUT`)
+/// tests can turn off: the answer must be the same either way.
+#[inline(always)]
+pub(super) fn intersect_triangle_checked<const SHORTCUT: bool>(
+    s: &RayShear,
+    ray_origin: Vec3,
     [v0, v1, v2]: [Vec3; 3],
     t_max: f32,
     may_be_degenerate: bool,
@@ -246,7 +259,7 @@ pub(super) fn intersect_triangle_flagged(
     // A t clear of its error bound as the packet leaves decide it (`clear_of_zero`,
     // without a zero edge function, as there) needs no f64 bound: Cornell direct,
     // whose shadow packets come here per occluded ray, 365 -> 357 instructions per ray.
-    if !zero {
+    if SHORTCUT && !zero {
         let sizes = error_sizes(
             &[a[kz], b[kz], c[kz]],
             &[ax, ay, bx, by, cx, cy],
