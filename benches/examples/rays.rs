@@ -1,18 +1,30 @@
-//! Traces the anchors bench's torus ray sets (primary, incoherent, shadow)
-//! through glint's 8-wide BVH once each, for `scripts/callgrind_rays.sh`,
-//! which counts only the instructions inside [`trace_rays`]: building the
-//! mesh, the BVH and the rays is left out of the figure.
-//!   rays [TORUS_N] [RAYS]   (defaults 158, the 100k torus, and 65536 rays)
+//! Traces the anchors bench's ray sets (primary, incoherent, shadow) on the torus or
+//! on Sponza through glint's 8-wide BVH once each, for `scripts/callgrind_rays.sh`,
+//! which counts the instructions inside [`trace_rays`] per set and those inside
+//! [`trace_build`] (the binary build and its collapse): making the mesh and the rays is
+//! left out of the figures.
+//!   rays [TORUS_N|sponza] [RAYS]   (defaults 158, the 100k torus, and 65536 rays)
+//! `sponza` is `../shared/assets`' Dabrovic Sponza, loaded and framed as the anchors
+//! bench does; without that folder the example says so and exits.
 //! With `GLINT_RAYS_PACKETS` set, every set goes 8 consecutive rays at a time through
 //! `WideBvh::occluded_packet` or `closest_packet_within` (as the render traces its rays).
 
 use std::hint::black_box;
 
+use glam::Vec3;
 use glint::accel::{PACKET, Ray, WideBvh};
 use glint_bench::{
-    View, displaced_torus, glint_wide, glint_wide_hits, incoherent_rays, primary_rays, shadow_rays,
-    thread_cpu_ns,
+    View, assets_dir, displaced_torus, find_file, glint_binary, glint_wide_hits, incoherent_rays,
+    load_model, primary_rays, shadow_rays, thread_cpu_ns,
 };
+
+/// The binary build and its collapse, as `glint_bench::glint_wide`; also the binary
+/// tree's SAH cost.
+#[inline(never)]
+fn trace_build(tris: &[[Vec3; 3]]) -> (WideBvh, f64) {
+    let bvh = glint_binary(tris);
+    (WideBvh::collapse(&bvh, tris), bvh.sah_cost())
+}
 
 /// The queries the anchors bench times for glint: any-hit up to t = 1 for
 /// shadow rays, closest hit without a bound otherwise; returns the hits.
@@ -45,10 +57,39 @@ fn main() {
             .and_then(|a| a.parse().ok())
             .unwrap_or(default)
     };
-    let (n, n_rays) = (arg(1, 158), arg(2, 1 << 16));
-    let tris = displaced_torus(n);
-    let wide = glint_wide(&tris);
-    let view = View::torus();
+    // One thread, this one: the build's parallel steps then run inside `trace_build`,
+    // where callgrind collects (a worker's instructions escaped it), and its count is
+    // the one-thread build's.
+    rayon::ThreadPoolBuilder::new()
+        .num_threads(1)
+        .use_current_thread()
+        .build_global()
+        .expect("a thread pool");
+    let n_rays = arg(2, 1 << 16);
+    let (tris, view) = if std::env::args().nth(1).as_deref() == Some("sponza") {
+        let Some(assets) = assets_dir() else {
+            println!("skipping sponza: ../shared/assets is absent");
+            return;
+        };
+        match find_file(&assets.join("classic/sponza-dabrovic"), "obj").and_then(|p| load_model(&p))
+        {
+            Ok(tris) if !tris.is_empty() => {
+                let view = View::framing(&tris);
+                (tris, view)
+            }
+            Ok(_) => {
+                println!("skipping sponza: no triangles");
+                return;
+            }
+            Err(e) => {
+                println!("skipping sponza: {e}");
+                return;
+            }
+        }
+    } else {
+        (displaced_torus(arg(1, 158)), View::torus())
+    };
+    let (wide, sah_cost) = trace_build(&tris);
     let side = (n_rays as f64).sqrt() as usize;
     let sets = [
         ("primary", primary_rays(&view, side, side)),
@@ -86,7 +127,7 @@ fn main() {
         }
     }
     println!(
-        "{} triangles, {:.1} bytes/tri",
+        "{} triangles, {:.1} bytes/tri, SAH cost {sah_cost:.3}",
         tris.len(),
         wide.bytes() as f64 / tris.len() as f64
     );

@@ -197,10 +197,15 @@ pub fn glint_occluded(bvh: &Bvh, tris: &[[Vec3; 3]], ray: &Ray) -> bool {
     })
 }
 
-/// glint's 8-wide BVH over `tris`, built as a render builds it (binned SAH, collapsed).
-pub fn glint_wide(tris: &[[Vec3; 3]]) -> WideBvh {
+/// glint's binary BVH over `tris`, built as a render builds it (binned SAH).
+pub fn glint_binary(tris: &[[Vec3; 3]]) -> Bvh {
     let bounds: Vec<Aabb> = tris.iter().map(|t| Aabb::from_points(t)).collect();
-    WideBvh::collapse(&Bvh::build(&bounds, SplitMethod::SahBinned), tris)
+    Bvh::build(&bounds, SplitMethod::SahBinned)
+}
+
+/// glint's 8-wide BVH over `tris`, built as a render builds it ([`glint_binary`], collapsed).
+pub fn glint_wide(tris: &[[Vec3; 3]]) -> WideBvh {
+    WideBvh::collapse(&glint_binary(tris), tris)
 }
 
 /// Traces `rays` one at a time through `wide` as the anchors time glint: any hit in
