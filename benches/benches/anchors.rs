@@ -28,12 +28,12 @@ use std::hint::black_box;
 use std::time::{Duration, Instant};
 
 use glam::{Vec3, Vec3A};
-use glint::accel::{Aabb, Bvh, PACKET, Ray, SplitMethod, TwoLevelBvh, WideBvh};
+use glint::accel::{Bvh, PACKET, Ray, TwoLevelBvh, WideBvh};
 use glint_bench::embree::{Embree, EmbreeScene};
 use glint_bench::tinybvh::TinyBvh8;
 use glint_bench::{
-    View, assets_dir, cornell_scene, displaced_torus, find_file, glint_closest, glint_occluded,
-    incoherent_rays, load_instanced, load_model, primary_rays, shadow_rays,
+    View, assets_dir, cornell_scene, displaced_torus, find_file, glint_binary, glint_closest,
+    glint_occluded, incoherent_rays, load_instanced, load_model, primary_rays, shadow_rays,
 };
 use obvhs::BvhBuildParams;
 use obvhs::cwbvh::{CwBvh, builder::build_cwbvh_from_tris};
@@ -210,7 +210,6 @@ fn bench_mesh(
         .num_threads(1)
         .build()
         .unwrap();
-    let bounds: Vec<Aabb> = tris.iter().map(|t| Aabb::from_points(t)).collect();
     let otris: Vec<Triangle> = tris
         .iter()
         .map(|t| Triangle {
@@ -222,17 +221,17 @@ fn bench_mesh(
 
     // Build: one thread each, then all threads where the library can.
     let build_rounds = rounds.min(5);
-    let glint_build = || WideBvh::collapse(&Bvh::build(&bounds, SplitMethod::SahBinned), tris);
+    let glint_build = || WideBvh::collapse(&glint_binary(tris), tris);
     let ms = |t: (f64, f64, f64)| format!("{:8.1} [{:.1}-{:.1}]", t.0, t.1, t.2);
     println!(
         "build, ms median [min-max]: 1 thread | all {} threads",
         rayon::current_num_threads()
     );
     let g1 = time_ms(build_rounds, || {
-        black_box(one_thread.install(|| Bvh::build(&bounds, SplitMethod::SahBinned)));
+        black_box(one_thread.install(|| glint_binary(tris)));
     });
     let gn = time_ms(build_rounds, || {
-        black_box(Bvh::build(&bounds, SplitMethod::SahBinned));
+        black_box(glint_binary(tris));
     });
     println!("  glint SAH      {} | {}", ms(g1), ms(gn));
     let w1 = time_ms(build_rounds, || {
@@ -274,7 +273,7 @@ fn bench_mesh(
         println!("  embree medium  {} | {}", ms(e1), ms(en));
     }
 
-    let bvh = Bvh::build(&bounds, SplitMethod::SahBinned);
+    let bvh = glint_binary(tris);
     let wide = WideBvh::collapse(&bvh, tris);
     let per_tri = |bytes: usize| bytes as f64 / tris.len() as f64;
     let binary = size_of_val(bvh.nodes.as_slice()) + size_of_val(bvh.prim_indices.as_slice());
@@ -317,10 +316,7 @@ fn bench_mesh(
         );
     }
     println!("{peer_memory}");
-    let once = two_level.map(|(n, _)| {
-        let b: Vec<Aabb> = bounds[..n].to_vec();
-        WideBvh::collapse(&Bvh::build(&b, SplitMethod::SahBinned), &tris[..n])
-    });
+    let once = two_level.map(|(n, _)| WideBvh::collapse(&glint_binary(&tris[..n]), &tris[..n]));
     if let (Some(once), Some((n, two))) = (&once, two_level) {
         println!(
             "  glint-2level {:.1} per triangle drawn ({n} triangles drawn once, 8-wide; {} meshes in {} instances, two-level)",

@@ -1,4 +1,5 @@
-//! Times the binned-SAH build alone, for profiling it (`valgrind --tool=callgrind`,
+//! Times the binned-SAH build alone (of triangles, with spatial splits where boxes
+//! overlap, as a render builds them), for profiling it (`valgrind --tool=callgrind`,
 //! `perf record`): `cargo run --release -p glint-bench --example build_bvh -- [n] [rounds] [threads]`
 //! builds over the anchors bench's torus of about `n` triangles (default 100000) `rounds` times
 //! (default 5) on `threads` threads (default 1) and prints the median and range of the
@@ -14,7 +15,7 @@
 use std::time::Instant;
 
 use glint::accel::leaf::LANES;
-use glint::accel::{Aabb, Bvh, SplitMethod, WideBvh};
+use glint::accel::{Bvh, SplitMethod, WideBvh};
 use glint_bench::{displaced_torus, thread_cpu_ns};
 
 fn main() {
@@ -25,7 +26,6 @@ fn main() {
     };
     let (n, rounds, threads) = (arg(1, 100_000), arg(2, 5), arg(3, 1));
     let tris = displaced_torus(((n / 4) as f64).sqrt().max(1.0) as usize);
-    let bounds: Vec<Aabb> = tris.iter().map(|t| Aabb::from_points(t)).collect();
     rayon::ThreadPoolBuilder::new()
         .num_threads(threads)
         .build_global()
@@ -41,7 +41,7 @@ fn main() {
     };
     let mut bvh = Bvh::default();
     let (ms, faults) = time_rounds(rounds, || {
-        in_pool(&mut || bvh = Bvh::build(&bounds, SplitMethod::SahBinned))
+        in_pool(&mut || bvh = Bvh::build_triangles(&tris, SplitMethod::SahBinned))
     });
     println!(
         "{} triangles, {threads} threads: build {ms}, {faults} page faults, {} nodes, {} leaves, SAH cost {:.3} ({:.3} counting leaves in groups of {LANES}), hash {:016x}",
@@ -64,7 +64,8 @@ fn main() {
     );
     // Both steps as the anchors bench times them (each round's trees dropped in it), on
     // a worker and then from the main thread, as its one-thread and all-threads rows do.
-    let pipeline = || WideBvh::collapse(&Bvh::build(&bounds, SplitMethod::SahBinned), &tris);
+    let pipeline =
+        || WideBvh::collapse(&Bvh::build_triangles(&tris, SplitMethod::SahBinned), &tris);
     let (worker, worker_faults) = time_rounds(rounds, || in_pool(&mut || drop(pipeline())));
     let (main, main_faults) = time_rounds(rounds, || {
         let start = thread_cpu_ns();

@@ -7,7 +7,7 @@ use std::path::{Path, PathBuf};
 
 use glam::{Vec3, vec3};
 use glint::accel::{
-    Aabb, Bvh, Ray, RayShear, SplitMethod, TwoLevelBvh, WideBvh, intersect_triangle_sheared,
+    Bvh, Ray, RayShear, SplitMethod, TwoLevelBvh, WideBvh, intersect_triangle_sheared,
 };
 use glint::test_util::Lcg;
 
@@ -197,10 +197,9 @@ pub fn glint_occluded(bvh: &Bvh, tris: &[[Vec3; 3]], ray: &Ray) -> bool {
     })
 }
 
-/// glint's binary BVH over `tris`, built as a render builds it (binned SAH).
+/// glint's binary BVH over `tris`, built as a render builds it (binned SAH, spatial splits).
 pub fn glint_binary(tris: &[[Vec3; 3]]) -> Bvh {
-    let bounds: Vec<Aabb> = tris.iter().map(|t| Aabb::from_points(t)).collect();
-    Bvh::build(&bounds, SplitMethod::SahBinned)
+    Bvh::build_triangles(tris, SplitMethod::SahBinned)
 }
 
 /// glint's 8-wide BVH over `tris`, built as a render builds it ([`glint_binary`], collapsed).

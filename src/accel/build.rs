@@ -14,7 +14,8 @@
 //! identical whatever the thread count.
 //!
 //! This file holds the recursion and the primitive records; `bins`, the bins, the
-//! SAH sweep over them and the partition by the chosen plane.
+//! SAH sweep over them and the partition by the chosen plane; `spatial`, the
+//! triangles' build with spatial splits, which takes these object splits where they pay.
 
 use glam::Vec3;
 use multiversion::multiversion;
@@ -28,6 +29,7 @@ use super::leaf::LANES;
 
 mod bins;
 mod rooms;
+mod spatial;
 
 use bins::{Bins, best_sah_plane, partition};
 
@@ -179,6 +181,15 @@ impl PrimRef {
         [lo[0], lo[1], lo[2], lo[3], n[0], n[1], n[2], n[3]]
     }
 
+    /// The box (the upper corner's fourth lane is not a coordinate).
+    #[inline(always)]
+    fn box4(&self) -> Box4 {
+        Box4 {
+            min: self.lo,
+            max: self.hi(),
+        }
+    }
+
     /// The upper corner (its fourth lane is not a coordinate).
     #[inline(always)]
     fn hi(&self) -> Lanes {
@@ -238,6 +249,10 @@ impl NodeBounds {
     }
 }
 
+/// A node's split: the size of its first part, both parts' bounds and the SAH cost of
+/// the plane (infinite for a split by another rule).
+type Split = (usize, NodeBounds, NodeBounds, f32);
+
 /// Nodes built by one task, in depth-first order; child offsets are relative
 /// to the task's subtree, whose first node lands at `shift` in the final array.
 struct Piece {
@@ -249,6 +264,13 @@ impl Bvh {
     /// Builds over primitive bounds (centroids = bounds' centres). Empty input → no nodes.
     pub fn build(bounds: &[Aabb], split: SplitMethod) -> Bvh {
         build(bounds, split)
+    }
+
+    /// Builds over triangles, with spatial splits where the binned SAH's boxes overlap
+    /// (see `build/spatial.rs`): a triangle may then be in several leaves, each leaf's box
+    /// holding its part of it. Empty input → no nodes.
+    pub fn build_triangles(positions: &[[Vec3; 3]], split: SplitMethod) -> Bvh {
+        spatial::build(positions, split)
     }
 }
 
@@ -350,7 +372,7 @@ fn build_subtree(
         let count = nodes.len() as u32;
         return (vec![Piece { nodes, shift: 0 }], count);
     }
-    let Some((mid, lb, rb)) = split(method, refs, b, depth, &mut bins) else {
+    let Some((mid, lb, rb, _)) = split(method, refs, b, depth, &mut bins) else {
         let leaf = BvhNode::leaf(b.node.aabb(), prim_base, n as u32);
         return (
             vec![Piece {
@@ -439,7 +461,7 @@ fn build_node(
     out: &mut impl NodeOut,
 ) {
     let n = refs.len();
-    let Some((mid, lb, rb)) = split(method, refs, b, depth, bins) else {
+    let Some((mid, lb, rb, _)) = split(method, refs, b, depth, bins) else {
         out.push(BvhNode::leaf(b.node.aabb(), prim_base, n as u32));
         return;
     };
@@ -474,11 +496,12 @@ fn bin_count(n: usize) -> usize {
     }
 }
 
-/// Partitions `refs`; returns the size of the first part and both parts'
-/// bounds, or None for a leaf. One clone per instruction set, picked at run time
-/// (as the BVH queries): the binning and partition loops inlined into it use three-
-/// operand AVX and its wider moves, and `popcnt` counts the SAH sweep's bins (in software
-/// without it, 15 instructions per node). Every step is exact (min, max, +, *, no FMA
+/// Partitions `refs`; returns the size of the first part, both parts' bounds and the
+/// SAH cost of the plane (as [`bins::Plane::cost`]; infinite for a split by another
+/// rule: median, room), or None for a leaf. One clone per instruction set, picked at
+/// run time (as the BVH queries): the binning and partition loops inlined into it use
+/// three-operand AVX and its wider moves, and `popcnt` counts the SAH sweep's bins (in
+/// software without it, 15 instructions per node). Every step is exact (min, max, +, *, no FMA
 /// contraction in Rust), so each clone makes the same tree.
 #[multiversion(targets("x86_64+avx2+fma+popcnt", "x86_64+sse4.2+popcnt"))]
 fn split(
@@ -487,7 +510,7 @@ fn split(
     b: NodeBounds,
     depth: u32,
     bins: &mut Bins,
-) -> Option<(usize, NodeBounds, NodeBounds)> {
+) -> Option<Split> {
     let n = refs.len();
     if n <= MIN_LEAF {
         return leaf_or_room(refs, &b, depth);
@@ -520,7 +543,7 @@ fn split(
             }
             let (ln, rn) = bins.boxes_around(&plane);
             let side = |node, centroids| NodeBounds { node, centroids };
-            Some((mid, side(ln, lc), side(rn, rc)))
+            Some((mid, side(ln, lc), side(rn, rc), plane.cost))
         }
         _ if n > MAX_LEAF => Some(median_split(refs, ext)),
         _ => leaf_or_room(refs, &b, depth),
@@ -530,24 +553,25 @@ fn split(
 /// For a node the SAH makes a leaf: None (the leaf), or the split of a room (see
 /// `rooms`). Not below the SAH's depth, where splits must halve the count.
 #[inline(always)]
-fn leaf_or_room(
-    refs: &mut [PrimRef],
-    b: &NodeBounds,
-    depth: u32,
-) -> Option<(usize, NodeBounds, NodeBounds)> {
+fn leaf_or_room(refs: &mut [PrimRef], b: &NodeBounds, depth: u32) -> Option<Split> {
     if depth >= SAH_DEPTH_LIMIT {
         return None;
     }
-    rooms::split_room(refs, b)
+    rooms::split_room(refs, b).map(|(mid, l, r)| (mid, l, r, f32::INFINITY))
 }
 
 /// Object median along the widest centroid axis; both halves' bounds.
-fn median_split(refs: &mut [PrimRef], centroid_extent: Vec3) -> (usize, NodeBounds, NodeBounds) {
+fn median_split(refs: &mut [PrimRef], centroid_extent: Vec3) -> Split {
     let axis = centroid_extent.max_position();
     let mid = refs.len() / 2;
     refs.select_nth_unstable_by(mid, |a, b| {
         a.centroid()[axis].total_cmp(&b.centroid()[axis])
     });
     let (left, right) = refs.split_at(mid);
-    (mid, NodeBounds::of(left), NodeBounds::of(right))
+    (
+        mid,
+        NodeBounds::of(left),
+        NodeBounds::of(right),
+        f32::INFINITY,
+    )
 }

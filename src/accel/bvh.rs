@@ -76,7 +76,8 @@ pub struct Bvh {
     /// Nodes in depth-first order; empty for no primitives. A [`HugeVec`]: in a
     /// huge-page mapping when large, as the build leaves it (see `build.rs`).
     pub nodes: HugeVec<BvhNode>,
-    /// Primitive indices (into the builder's `bounds`), grouped by leaf.
+    /// Primitive indices (into the builder's `bounds`), grouped by leaf; a triangle cut
+    /// by spatial splits is in several leaves.
     pub prim_indices: HugeVec<u32>,
 }
 
@@ -143,7 +144,10 @@ impl Bvh {
     /// 0, 1, 2, … and reaches every node once; an interior node's second child
     /// lies after its first; leaves are non-empty and cover `prim_indices` in
     /// order without gaps or overlap; every node box contains its children's
-    /// boxes and a leaf box contains its primitives' boxes; depth ≤ [`MAX_DEPTH`].
+    /// boxes and a leaf box contains its primitives' boxes; depth ≤ [`MAX_DEPTH`]. A
+    /// tree of [`Bvh::build_triangles`] that cut triangles holds them in several leaves,
+    /// each leaf box holding a part: not a permutation, nor whole boxes. Check its
+    /// collapse with `WideBvh::validate`, which allows both.
     pub fn validate(&self, bounds: &[Aabb]) -> Result<(), String> {
         if self.nodes.is_empty() {
             if bounds.is_empty() && self.prim_indices.is_empty() {

@@ -24,6 +24,7 @@ use super::wide_query::LeafVisitor;
 use super::{Aabb, BOX_MARGIN};
 use arrayvec::ArrayVec;
 use glam::Vec3;
+use std::collections::HashMap;
 
 /// A `WIDTH`-wide BVH with its triangles in leaf order; root at node 0.
 #[derive(Clone, Debug, Default)]
@@ -127,7 +128,8 @@ impl WideBvh {
             leaves: LeafTris {
                 groups: leaves.into(),
             },
-            triangles: bvh.prim_indices.len(),
+            // Not `prim_indices.len()`: a spatial split's tree holds some triangles twice.
+            triangles: positions.len(),
             bounds: bvh.bounds(),
             depth,
         }
@@ -174,7 +176,8 @@ impl WideBvh {
         self.leaves.groups[lane / LANES].triangle(lane % LANES)
     }
 
-    /// Where each of the caller's triangles sits in `leaves` (`group * LANES + lane`):
+    /// Where each of the caller's triangles sits in `leaves` (`group * LANES + lane`; its
+    /// last lane where a spatial split put it in several, which all hold its vertices):
     /// computed, not held, as a render reaches a triangle's vertices through its hit.
     pub fn prim_lanes(&self) -> Vec<u32> {
         let mut lanes = vec![0; self.triangles];
@@ -452,10 +455,12 @@ impl WideBvh {
     /// Err names the first violation. Invariants: every node is reached once from the
     /// root and after its parent; leaves are non-empty and own their triangle groups,
     /// a lane holding triangle `p` holding `positions[p]`, padding lanes NaN and
-    /// [`NO_PRIM`]; each of `0..positions.len()` is in one lane, and `triangles` counts
-    /// them; every group belongs to a leaf; a child box contains its
-    /// node's children's boxes, a leaf box its triangles; `bounds` contains the root's
-    /// children; unused slots have no box; no node lies deeper than `depth`.
+    /// [`NO_PRIM`]; each of `0..positions.len()` is in a lane, and `triangles` counts
+    /// them; every group belongs to a leaf; a child box contains its node's children's
+    /// boxes; a triangle lies in a leaf box that holds it whole or (cut by spatial
+    /// splits) in the union of its leaves' boxes, which [`covers`] samples; `bounds`
+    /// contains the root's children; unused slots have no box; no node lies deeper than
+    /// `depth`.
     pub fn validate(&self, positions: &[[Vec3; 3]]) -> Result<(), String> {
         let n = positions.len();
         if self.triangles != n {
@@ -470,7 +475,9 @@ impl WideBvh {
         }
         let mut used = vec![false; self.leaves.groups.len()];
         let mut reached = vec![false; self.nodes.len()];
-        let mut seen = vec![false; n];
+        // Whether a leaf box holds triangle `p` whole; else the boxes of its leaves.
+        let mut whole = vec![false; n];
+        let mut parts: HashMap<u32, Vec<Aabb>> = HashMap::new();
         if self.depth > MAX_DEPTH {
             return Err(format!("depth {} exceeds {MAX_DEPTH}", self.depth));
         }
@@ -506,17 +513,16 @@ impl WideBvh {
                     continue;
                 }
                 let leaf = |p: u32, tri: [Vec3; 3]| {
-                    let Some(s) = seen.get_mut(p as usize).filter(|s| !**s) else {
-                        return Err(format!("triangle {p} out of range or in two lanes"));
+                    let Some(w) = whole.get_mut(p as usize) else {
+                        return Err(format!("triangle {p} out of range"));
                     };
-                    *s = true;
                     if tri != positions[p as usize] {
                         return Err(format!("a lane of triangle {p} holds other vertices"));
                     }
-                    if !b.contains_box(&Aabb::from_points(&tri)) {
-                        return Err(format!(
-                            "node {i} lane {lane}: triangle {p} outside the box"
-                        ));
+                    if b.contains_box(&Aabb::from_points(&tri)) {
+                        *w = true;
+                    } else {
+                        parts.entry(p).or_default().push(b);
                     }
                     Ok(())
                 };
@@ -528,14 +534,42 @@ impl WideBvh {
         if let Some(i) = reached.iter().position(|r| !r) {
             return Err(format!("node {i} is unreachable"));
         }
-        if let Some(p) = seen.iter().position(|s| !s) {
-            return Err(format!("triangle {p} is in no leaf"));
+        for (p, tri) in positions.iter().enumerate() {
+            if whole[p] {
+                continue;
+            }
+            match parts.get(&(p as u32)) {
+                None => return Err(format!("triangle {p} is in no leaf")),
+                Some(boxes) if !covers(boxes, tri) => {
+                    return Err(format!("triangle {p} is outside its leaves' boxes"));
+                }
+                Some(_) => {}
+            }
         }
         if let Some(g) = used.iter().position(|u| !u) {
             return Err(format!("triangle group {g} is in no leaf"));
         }
         Ok(())
     }
+}
+
+/// Whether the union of `boxes` holds triangle `tri`, sampled: its points at barycentric
+/// coordinates in steps of 1/8, each within a few units in the last place of the
+/// triangle's largest coordinate (the samples' rounding) of a box.
+fn covers(boxes: &[Aabb], tri: &[Vec3; 3]) -> bool {
+    const STEPS: u32 = 8;
+    let [a, b, c] = *tri;
+    let size = a.abs().max(b.abs()).max(c.abs()).max_element();
+    let slack = Vec3::splat(8.0 * f32::EPSILON * size);
+    (0..=STEPS).all(|i| {
+        (0..=STEPS - i).all(|j| {
+            let (u, v) = (i as f32 / STEPS as f32, j as f32 / STEPS as f32);
+            let p = a + u * (b - a) + v * (c - a);
+            boxes
+                .iter()
+                .any(|bx| (bx.min - slack).cmple(p).all() && p.cmple(bx.max + slack).all())
+        })
+    })
 }
 
 #[cfg(test)]

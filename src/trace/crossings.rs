@@ -24,7 +24,10 @@ impl Crossings {
         }
     }
 
-    /// All crossings in order of t.
+    /// All crossings in order of t, then material and texture coordinate: equal
+    /// crossings (one triangle met in two leaves, which a spatial split leaves it in)
+    /// lie side by side, and which of a shared edge's twins comes first does not depend
+    /// on the order the BVH met them.
     pub(super) fn sorted(&mut self) -> &[Crossing] {
         let all = if self.spill.is_empty() {
             &mut self.inline[..self.len]
@@ -32,7 +35,10 @@ impl Crossings {
             self.spill.extend_from_slice(&self.inline[..self.len]);
             &mut self.spill[..]
         };
-        all.sort_unstable_by(|a, b| a.0.total_cmp(&b.0));
+        all.sort_unstable_by(|a, b| {
+            let key = |c: &Crossing| (c.1, c.2.x.to_bits(), c.2.y.to_bits());
+            a.0.total_cmp(&b.0).then_with(|| key(a).cmp(&key(b)))
+        });
         all
     }
 }

@@ -134,6 +134,17 @@ fn build(bounds: &[Aabb], s: &Settings) -> Bvh {
     }
 }
 
+/// [`build`] over triangles, whose tree may cut them by spatial splits.
+fn build_triangles(positions: &[[Vec3; 3]], s: &Settings) -> Bvh {
+    match s.acceleration {
+        Acceleration::Bvh => Bvh::build_triangles(positions, split_method(s)),
+        Acceleration::None => {
+            let bounds: Vec<Aabb> = positions.iter().map(|p| Aabb::from_points(p)).collect();
+            Bvh::single_leaf(&bounds)
+        }
+    }
+}
+
 /// Transforms every mesh used once to world space and builds the triangle BVH; meshes
 /// used by two or more entities get one object-space BVH each, shared by their instances.
 /// The binary tree is kept after collapsing only when the plan says an observer walks it.
@@ -189,11 +200,8 @@ pub fn build_triangle_bvh(
             g.tri_material.push(material);
         }
     }
-    let bounds: Vec<Aabb> = positions.iter().map(|p| Aabb::from_points(p)).collect();
-    let flattened = bounds.len();
-    let bvh = build(&bounds, &settings);
-    // Freed before the wide tree is made, when memory peaks (both trees are alive).
-    drop(bounds);
+    let flattened = positions.len();
+    let bvh = build_triangles(&positions, &settings);
     if plan.binary_triangle_bvh {
         g.tri_bvh = bvh;
         g.collapse_triangle_bvh(&positions);
@@ -228,8 +236,7 @@ fn object_bvh(data: &MeshData, settings: &Settings) -> WideBvh {
         .iter()
         .map(|t| t.map(|i| v[i as usize].position))
         .collect();
-    let bounds: Vec<Aabb> = positions.iter().map(|p| Aabb::from_points(p)).collect();
-    WideBvh::collapse(&build(&bounds, settings), &positions)
+    WideBvh::collapse(&build_triangles(&positions, settings), &positions)
 }
 
 /// Gathers the spheres and builds their BVH.
@@ -471,7 +478,8 @@ impl SceneGeometry {
     /// Light transmitted along the ray through (0, t_max): the product over every surface
     /// crossed of `(1 - alpha) * (1 - (1 - kd) * alpha)`; zero at the first opaque one.
     /// A ray through the edge shared by two triangles of one surface hits both at the same
-    /// t; such twins are counted once.
+    /// t; such twins are counted once, as is a triangle met in two leaves (a spatial split
+    /// leaves it in both), whose crossings are equal and so sorted side by side.
     pub fn transmittance<V: GeometryVisitor>(
         &self,
         ray: &Ray,
@@ -654,3 +662,7 @@ pub(super) fn triangle_hit(prim: u32, h: &TriangleHit) -> Hit {
         lane: 0,
     }
 }
+
+#[cfg(test)]
+#[path = "geometry_tests.rs"]
+mod tests;

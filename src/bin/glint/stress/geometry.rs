@@ -45,7 +45,10 @@ pub fn geometry_of(
         tri_normals: tris.iter().map(|_| [Vec3::Z; 3]).collect(),
         tri_texcoords: tris.iter().map(|_| [Vec2::ZERO; 3]).collect(),
         tri_material: vec![0; tris.len()],
-        tri_bvh: build(&tri_bounds),
+        tri_bvh: match bvh {
+            Some(split) => Bvh::build_triangles(tris, split),
+            None => Bvh::single_leaf(&tri_bounds),
+        },
         spheres: spheres.to_vec(),
         sphere_material: vec![0; spheres.len()],
         sphere_bvh: build(&sphere_bounds),

@@ -1,0 +1,345 @@
+//! Spatial splits (Stich, Friedrich, Dietrich 2009, "Spatial Splits in Bounding Volume
+//! Hierarchies"): besides the binned SAH's object split, a node of triangles may split
+//! by a plane that cuts the triangles straddling it, each part going to its side with
+//! the box of the triangle clipped to that side. Long thin triangles (Sponza's) have
+//! large boxes that overlap a lot; cut, they shrink. A triangle may then be referenced
+//! by several leaves, each box holding its part of it.
+//!
+//! The top of the tree is built depth first on one thread, each node's references in a
+//! `Vec` of its own (a split may add references, so they cannot be partitioned in
+//! place). Each node first takes the object split of [`super::split`]; where that
+//! split's two boxes overlap by more than [`ALPHA`] of the root's area, the spatial
+//! split is binned too, on the node's widest axis, and taken when its SAH cost is
+//! lower. Below nodes too small for such an overlap the object build takes over, in
+//! place and in parallel. Every step is deterministic, so the tree is the same
+//! whatever the thread count.
+
+use glam::Vec3;
+use wide::f32x4;
+
+use super::bins::Bins;
+use super::{Box4, NodeBounds, PrimRef, blocks, build_subtree, split};
+use crate::accel::bvh::{Bvh, BvhNode, SplitMethod};
+use crate::accel::{Aabb, huge::HugeVec};
+
+/// Bins per axis of a spatial split.
+const SPATIAL_BINS: usize = 16;
+/// A spatial split is tried only where the object split's two boxes overlap by more
+/// than this fraction of the root's surface area. The paper's 1e-5 tries it nearly
+/// everywhere: on Sponza it took 665.9M build instructions (one thread, with the
+/// collapse) for 1,424 per incoherent ray, 1e-3 303.3M for 1,430, this 226.1M for 1,440
+/// (object splits only: 111.2M, 1,838); 1e-1 cuts too few triangles (1,583).
+const ALPHA: f32 = 1e-2;
+/// References the spatial splits may add, per triangle. Sponza's wide tree takes 63.9
+/// rather than 58.4 bytes per triangle.
+const BUDGET: f32 = 0.3;
+
+/// One spatial bin: the box of the triangles' parts in it, and how many triangles
+/// start and end in it.
+#[derive(Clone, Copy)]
+struct SpatialBin {
+    bounds: Box4,
+    enter: u32,
+    exit: u32,
+}
+
+/// The best spatial plane: its axis and position, and the boxes and reference counts
+/// of both sides.
+struct SpatialPlane {
+    axis: usize,
+    pos: f32,
+    left: (Box4, u32),
+    right: (Box4, u32),
+}
+
+/// Both sides of a split: their references and bounds.
+type Sides = (Vec<PrimRef>, Vec<PrimRef>, NodeBounds, NodeBounds);
+
+/// The builder's state: the triangles, the object split's bins (scratch) and the
+/// tree so far.
+struct Builder<'a> {
+    method: SplitMethod,
+    positions: &'a [[Vec3; 3]],
+    /// [`ALPHA`] times the root's surface area.
+    min_overlap: f32,
+    bins: Bins,
+    nodes: Vec<BvhNode>,
+    prims: Vec<u32>,
+}
+
+/// The binned-SAH tree over the triangles `positions` with spatial splits (see the
+/// module's comment); the object-only build where a coordinate is not finite.
+pub(super) fn build(positions: &[[Vec3; 3]], method: SplitMethod) -> Bvh {
+    let bounds: Vec<Aabb> = positions.iter().map(|t| Aabb::from_points(t)).collect();
+    let finite = positions.iter().flatten().all(|v| v.is_finite());
+    if positions.is_empty() || method != SplitMethod::SahBinned || !finite {
+        return super::build(&bounds, method);
+    }
+    let refs: Vec<PrimRef> = bounds
+        .iter()
+        .enumerate()
+        .map(|(i, b)| PrimRef::new(i, b))
+        .collect();
+    let root = NodeBounds::of(&refs);
+    let mut b = Builder {
+        method,
+        positions,
+        min_overlap: ALPHA * root.node.surface_area(),
+        bins: Bins::empty(Box4::EMPTY),
+        nodes: Vec::with_capacity(super::node_estimate(refs.len())),
+        prims: Vec::with_capacity(refs.len()),
+    };
+    let budget = (BUDGET * refs.len() as f32) as usize;
+    b.node(refs, root, 1, budget);
+    Bvh {
+        nodes: HugeVec::from(b.nodes),
+        prim_indices: HugeVec::from(b.prims),
+    }
+}
+
+impl Builder<'_> {
+    /// Appends the subtree over `refs` (bounds `b`), which may add up to `budget`
+    /// references by spatial splits.
+    fn node(&mut self, mut refs: Vec<PrimRef>, b: NodeBounds, depth: u32, budget: usize) {
+        let n = refs.len();
+        // No part of a node overlaps more than its box, so below this no spatial split is
+        // tried: the object build's, in place (no references copied) and in parallel.
+        if budget == 0 || b.node.surface_area() <= self.min_overlap {
+            let (first, base) = (self.prims.len() as u32, self.nodes.len() as u32);
+            let (pieces, _) = build_subtree(self.method, &mut refs, first, depth, b);
+            for p in pieces {
+                // As `assemble` places them, after the nodes so far.
+                self.nodes.extend(p.nodes.iter().map(|&n| {
+                    let mut n = n;
+                    if !n.is_leaf() {
+                        n.offset += base + p.shift;
+                    }
+                    n
+                }));
+            }
+            self.prims.extend(refs.iter().map(PrimRef::index));
+            return;
+        }
+        let Some((mid, lb, rb, cost)) = split(self.method, &mut refs, b, depth, &mut self.bins)
+        else {
+            let first = self.prims.len() as u32;
+            self.nodes
+                .push(BvhNode::leaf(b.node.aabb(), first, n as u32));
+            self.prims.extend(refs.iter().map(PrimRef::index));
+            return;
+        };
+        let spatial = if cost.is_finite()
+            && intersection(&lb.node, &rb.node).surface_area() > self.min_overlap
+        {
+            self.spatial_plane(&refs, &b.node, cost, budget)
+        } else {
+            None
+        };
+        let (left, right, lb, rb) = match spatial.and_then(|p| self.cut(&refs, &p)) {
+            Some(sides) => sides,
+            None => {
+                let right = refs.split_off(mid);
+                (refs, right, lb, rb)
+            }
+        };
+        // What is left of the budget, shared in proportion to the sides' references.
+        let (ln, rn) = (left.len(), right.len());
+        // The bins' counts bound the references added; rounding at the plane may add one.
+        let rest = budget.saturating_sub(ln + rn - n);
+        let left_budget = rest * ln / (ln + rn);
+        let me = self.nodes.len();
+        self.nodes.push(BvhNode::interior(b.node.aabb(), 0));
+        self.node(left, lb, depth + 1, left_budget);
+        self.nodes[me].offset = self.nodes.len() as u32;
+        self.node(right, rb, depth + 1, rest - left_budget);
+    }
+
+    /// The cheapest spatial plane of the node of box `node` over `refs`, if it costs
+    /// less than `object_cost` and adds at most `budget` references. Planes on the
+    /// node's widest axis only: on Sponza all three cost 70% more build instructions
+    /// (384.6M rather than 226.1M) for as many per ray (incoherent 1,444 rather than
+    /// 1,440, primary 437 rather than 425, shadow 658 rather than 665).
+    fn spatial_plane(
+        &self,
+        refs: &[PrimRef],
+        node: &Box4,
+        object_cost: f32,
+        budget: usize,
+    ) -> Option<SpatialPlane> {
+        let axis = node.aabb().extent().max_position();
+        let lo = node.min[axis];
+        let step = (node.max[axis] - lo) / SPATIAL_BINS as f32;
+        // A flat node (or an infinite one, whose step is NaN) has no plane.
+        if step.is_nan() || step <= 0.0 {
+            return None;
+        }
+        let plane = |k: usize| lo + k as f32 * step;
+        // Both corners' bins at once, clamped as floats (NaN to bin 0), then truncated.
+        let (min, scale) = (f32x4::splat(lo), f32x4::splat(1.0 / step));
+        let last_bin = f32x4::splat((SPATIAL_BINS - 1) as f32);
+        let bins_of = |r: &PrimRef| {
+            let x = f32x4::from([r.lo[axis], -r.neg_hi[axis], 0.0, 0.0]);
+            let k = ((x - min) * scale).fast_max(f32x4::ZERO).fast_min(last_bin);
+            let [first, last, ..] = k.fast_trunc_int().to_array();
+            (first as usize % SPATIAL_BINS, last as usize % SPATIAL_BINS)
+        };
+        let mut bins = [SpatialBin {
+            bounds: Box4::EMPTY,
+            enter: 0,
+            exit: 0,
+        }; SPATIAL_BINS];
+        for r in refs {
+            let tri = &self.positions[r.index() as usize];
+            let (first, last) = bins_of(r);
+            bins[first].enter += 1;
+            bins[last].exit += 1;
+            let mut rest = r.box4();
+            for (k, bin) in bins.iter_mut().enumerate().take(last).skip(first) {
+                let (l, r) = clip::<false>(tri, &rest, axis, plane(k + 1));
+                bin.bounds = bin.bounds.union(l);
+                rest = r;
+            }
+            bins[last].bounds = bins[last].bounds.union(rest);
+        }
+        // Right sides first (the plane before bin k), then the sweep from the left.
+        let mut right = [(Box4::EMPTY, 0u32); SPATIAL_BINS];
+        let mut acc = (Box4::EMPTY, 0);
+        for k in (1..SPATIAL_BINS).rev() {
+            acc = (acc.0.union(bins[k].bounds), acc.1 + bins[k].exit);
+            right[k] = acc;
+        }
+        let mut best: Option<(f32, SpatialPlane)> = None;
+        let mut left = (Box4::EMPTY, 0u32);
+        for k in 1..SPATIAL_BINS {
+            left = (left.0.union(bins[k - 1].bounds), left.1 + bins[k - 1].enter);
+            let r = right[k];
+            if left.1 == 0 || r.1 == 0 || (left.1 + r.1) as usize > refs.len() + budget {
+                continue;
+            }
+            let cost = left.0.surface_area() * blocks(left.1) + r.0.surface_area() * blocks(r.1);
+            if cost < best.as_ref().map_or(object_cost, |b| b.0) {
+                let p = SpatialPlane {
+                    axis,
+                    pos: plane(k),
+                    left,
+                    right: r,
+                };
+                best = Some((cost, p));
+            }
+        }
+        best.map(|b| b.1)
+    }
+
+    /// The references of both sides of `plane` and their bounds: a straddling triangle
+    /// goes to one side whole where that costs less than cutting it (the paper's
+    /// reference unsplitting), else its part on each side goes there. None when a side
+    /// would be empty or as large as the node.
+    fn cut(&self, refs: &[PrimRef], plane: &SpatialPlane) -> Option<Sides> {
+        let (axis, pos) = (plane.axis, plane.pos);
+        let ((lbox, ln), (rbox, rn)) = (plane.left, plane.right);
+        let (al, ar) = (lbox.surface_area(), rbox.surface_area());
+        let (nl, nr) = (ln as f32, rn as f32);
+        let cut_cost = al * nl + ar * nr;
+        let (mut left, mut right) = (Vec::new(), Vec::new());
+        for r in refs {
+            let b = r.box4();
+            if b.max[axis] <= pos {
+                left.push(*r);
+            } else if b.min[axis] >= pos {
+                right.push(*r);
+            } else if lbox.union(b).surface_area() * nl + ar * (nr - 1.0) < cut_cost {
+                left.push(*r);
+            } else if al * (nl - 1.0) + rbox.union(b).surface_area() * nr < cut_cost {
+                right.push(*r);
+            } else {
+                let tri = &self.positions[r.index() as usize];
+                let (l, rr) = clip::<true>(tri, &b, axis, pos);
+                let index = r.index() as usize;
+                match (is_empty(&l), is_empty(&rr)) {
+                    (false, false) => {
+                        left.push(PrimRef::new(index, &l.aabb()));
+                        right.push(PrimRef::new(index, &rr.aabb()));
+                    }
+                    (false, true) => left.push(PrimRef::new(index, &l.aabb())),
+                    (true, false) => right.push(PrimRef::new(index, &rr.aabb())),
+                    // Rounding left no part on either side: the box stays whole.
+                    (true, true) => left.push(*r),
+                }
+            }
+        }
+        let n = refs.len();
+        if left.is_empty() || right.is_empty() || left.len() >= n || right.len() >= n {
+            return None;
+        }
+        let (lb, rb) = (NodeBounds::of(&left), NodeBounds::of(&right));
+        Some((left, right, lb, rb))
+    }
+}
+
+/// The boxes of the parts of triangle `tri` within `bounds` on either side of the plane
+/// at `pos` on `axis`: its corners on each side and where its edges cross the plane,
+/// each box then cut to `bounds`. With `EXACT` a crossing's other coordinates are
+/// computed in f64 and rounded outwards, so each box holds its exact part (an empty box
+/// where rounding left none); without, in f32, for the binning's estimate of the cost.
+#[inline(always)]
+fn clip<const EXACT: bool>(tri: &[Vec3; 3], bounds: &Box4, axis: usize, pos: f32) -> (Box4, Box4) {
+    let (mut left, mut right) = (Box4::EMPTY, Box4::EMPTY);
+    for i in 0..3 {
+        let (v0, v1) = (tri[i], tri[(i + 1) % 3]);
+        let (a0, a1) = (v0[axis], v1[axis]);
+        let p = [v0.x, v0.y, v0.z, 0.0];
+        if a0 <= pos {
+            left.grow(p, p);
+        }
+        if a0 >= pos {
+            right.grow(p, p);
+        }
+        if !((a0 < pos && pos < a1) || (a1 < pos && pos < a0)) {
+            continue;
+        }
+        if !EXACT {
+            let mut c = (v0 + (pos - a0) / (a1 - a0) * (v1 - v0))
+                .extend(0.0)
+                .to_array();
+            c[axis] = pos;
+            left.grow(c, c);
+            right.grow(c, c);
+            continue;
+        }
+        {
+            let t = (f64::from(pos) - f64::from(a0)) / (f64::from(a1) - f64::from(a0));
+            let at = |k: usize| f64::from(v0[k]) + t * (f64::from(v1[k]) - f64::from(v0[k]));
+            let (mut lo, mut hi) = ([0.0; 4], [0.0; 4]);
+            for k in 0..3 {
+                let c = at(k) as f32;
+                (lo[k], hi[k]) = if k == axis {
+                    (pos, pos)
+                } else {
+                    (c.next_down(), c.next_up())
+                };
+            }
+            left.grow(lo, hi);
+            right.grow(lo, hi);
+        }
+    }
+    (intersection(&left, bounds), intersection(&right, bounds))
+}
+
+/// The intersection of two boxes (empty on an axis where they do not meet).
+fn intersection(a: &Box4, b: &Box4) -> Box4 {
+    let mut out = Box4::EMPTY;
+    for k in 0..3 {
+        out.min[k] = a.min[k].max(b.min[k]);
+        out.max[k] = a.max[k].min(b.max[k]);
+    }
+    out
+}
+
+/// Whether `b` holds no point (lower above upper on an axis; the coordinates are finite).
+fn is_empty(b: &Box4) -> bool {
+    (0..3).any(|k| b.min[k] > b.max[k])
+}
+
+#[cfg(test)]
+#[path = "spatial_tests.rs"]
+mod tests;
