@@ -288,7 +288,7 @@ impl Builder<'_> {
                 let tri = &self.positions[r.index() as usize];
                 let (l, rr) = clip::<true>(tri, &b, axis, pos);
                 let index = r.index() as usize;
-                match (is_empty(&l), is_empty(&rr)) {
+                match (l.aabb().is_empty(), rr.aabb().is_empty()) {
                     (false, false) => {
                         left.push(PrimRef::new(index, &l.aabb()));
                         right.push(PrimRef::new(index, &rr.aabb()));
@@ -366,11 +366,6 @@ fn intersection(a: &Box4, b: &Box4) -> Box4 {
         out.max[k] = a.max[k].min(b.max[k]);
     }
     out
-}
-
-/// Whether `b` holds no point (lower above upper on an axis; the coordinates are finite).
-fn is_empty(b: &Box4) -> bool {
-    (0..3).any(|k| b.min[k] > b.max[k])
 }
 
 #[cfg(test)]

@@ -188,7 +188,7 @@ fn a_cut_triangle_s_parts_hold_the_exact_crossings() {
     assert!(r.min[1] <= 0.0 && r.min[2] <= 0.0);
     // A plane beside the triangle leaves one side empty.
     let (l, r) = clip::<true>(&tri, &b, 0, 3.5);
-    assert!(is_empty(&r) && !is_empty(&l));
+    assert!(r.aabb().is_empty() && !l.aabb().is_empty());
 }
 
 #[test]
