@@ -1,7 +1,8 @@
 //! Times the binned-SAH build alone (of triangles, with spatial splits where boxes
 //! overlap, as a render builds them), for profiling it (`valgrind --tool=callgrind`,
-//! `perf record`): `cargo run --release -p glint-bench --example build_bvh -- [n] [rounds] [threads]`
-//! builds over the anchors bench's torus of about `n` triangles (default 100000) `rounds` times
+//! `perf record`): `cargo run --release -p glint-bench --example build_bvh -- [n|sponza] [rounds] [threads]`
+//! builds over the anchors bench's torus of about `n` triangles (default 100000), or over
+//! `../shared/assets`' Dabrovic Sponza as the anchors bench loads it, `rounds` times
 //! (default 5) on `threads` threads (default 1) and prints the median and range of the
 //! build time, the tree's SAH cost and a hash of the tree (which changes when the tree
 //! does), then the median and range of its collapse to the 8-wide BVH on the same threads
@@ -16,7 +17,7 @@ use std::time::Instant;
 
 use glint::accel::leaf::LANES;
 use glint::accel::{Bvh, SplitMethod, WideBvh};
-use glint_bench::{displaced_torus, thread_cpu_ns};
+use glint_bench::{assets_dir, displaced_torus, find_file, load_model, thread_cpu_ns};
 
 fn main() {
     let arg = |i: usize, default: usize| {
@@ -24,12 +25,29 @@ fn main() {
             .nth(i)
             .map_or(default, |a| a.parse().expect("a number"))
     };
-    let (n, rounds, threads) = (arg(1, 100_000), arg(2, 5), arg(3, 1));
-    let tris = displaced_torus(((n / 4) as f64).sqrt().max(1.0) as usize);
+    let (rounds, threads) = (arg(2, 5), arg(3, 1));
+    // Before loading Sponza, whose import runs on the global pool.
     rayon::ThreadPoolBuilder::new()
         .num_threads(threads)
         .build_global()
         .expect("a thread pool");
+    let tris = if std::env::args().nth(1).as_deref() == Some("sponza") {
+        let Some(assets) = assets_dir() else {
+            println!("skipping sponza: ../shared/assets is absent");
+            return;
+        };
+        match find_file(&assets.join("classic/sponza-dabrovic"), "obj").and_then(|p| load_model(&p))
+        {
+            Ok(tris) => tris,
+            Err(e) => {
+                println!("skipping sponza: {e}");
+                return;
+            }
+        }
+    } else {
+        let n = arg(1, 100_000);
+        displaced_torus(((n / 4) as f64).sqrt().max(1.0) as usize)
+    };
     // Runs `f` on a worker of the pool (from the main thread it would run there, with
     // the main thread's allocator arena); the worker's CPU time in it.
     let in_pool = |f: &mut (dyn FnMut() + Send)| {
