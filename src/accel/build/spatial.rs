@@ -5,22 +5,27 @@
 //! large boxes that overlap a lot; cut, they shrink. A triangle may then be referenced
 //! by several leaves, each box holding its part of it.
 //!
-//! The top of the tree is built depth first on one thread, each node's references in a
-//! `Vec` of its own (a split may add references, so they cannot be partitioned in
-//! place). Each node first takes the object split of [`super::split`]; where that
-//! split's two boxes overlap by more than [`ALPHA`] of the root's area, the spatial
-//! split is binned too, on the node's widest axis (where some triangles are longer than
-//! a bin), and taken when its SAH cost is lower. Below nodes too small for such an
-//! overlap the object build takes over, in place and in parallel. Every step is
-//! deterministic, so the tree is the same whatever the thread count.
+//! The top of the tree is built depth first, each node's references in a `Vec` of its
+//! own (a split may add references, so they cannot be partitioned in place), the two
+//! sides of large nodes in parallel, as the object build's. Each node first takes the
+//! object split of [`super::split`]; where that split's two boxes overlap by more than
+//! [`ALPHA`] of the root's area, the spatial split is binned too, on the node's widest
+//! axis (where some triangles are longer than a bin), and taken when its SAH cost is
+//! lower. Below nodes too small for such an overlap the object build takes over, in
+//! place and in parallel. Every step is deterministic and the parallel tasks' pieces
+//! are joined in order, so the tree is the same whatever the thread count.
 
 use glam::Vec3;
 use wide::f32x4;
 
 use super::bins::Bins;
-use super::{Box4, NodeBounds, PrimRef, blocks, build_subtree, split};
+use super::{
+    Box4, NodeBounds, PARALLEL_MIN, Piece, PrimRef, assemble, blocks, build_node, build_subtree,
+    split,
+};
+use crate::accel::Aabb;
 use crate::accel::bvh::{Bvh, BvhNode, SplitMethod};
-use crate::accel::{Aabb, huge::HugeVec};
+use crate::accel::huge::{Backing, HugeVec};
 
 /// Bins per axis of a spatial split.
 const SPATIAL_BINS: usize = 16;
@@ -74,16 +79,51 @@ struct SpatialPlane {
 /// Both sides of a split: their references and bounds.
 type Sides = (Vec<PrimRef>, Vec<PrimRef>, NodeBounds, NodeBounds);
 
-/// The builder's state: the triangles, the object split's bins (scratch) and the
-/// tree so far.
+/// What a node of the top becomes.
+enum Step {
+    /// Too small for spatial splits: the object build's subtree over its references.
+    Object(Vec<PrimRef>),
+    /// A leaf of its references.
+    Leaf(Vec<PrimRef>),
+    /// Split: both sides' references, bounds and budgets.
+    Split(Sides, usize, usize),
+}
+
+/// The builder's input, shared by its tasks.
 struct Builder<'a> {
     method: SplitMethod,
     positions: &'a [[Vec3; 3]],
     /// [`ALPHA`] times the root's surface area.
     min_overlap: f32,
-    bins: Bins,
+}
+
+/// The subtree one task builds: its nodes in pieces, as [`build_subtree`]'s, each with
+/// where its leaves' primitives start in the subtree's (a side's count is known only
+/// once built, as spatial splits add references), their count, and its primitive
+/// indices in order, in parts.
+struct Part {
+    pieces: Vec<(Piece, u32)>,
+    count: u32,
+    prims: Vec<Vec<u32>>,
+}
+
+impl Part {
+    /// The part of one piece of `nodes` over the primitives `prims`.
+    fn one(nodes: Vec<BvhNode>, prims: Vec<u32>) -> Part {
+        Part {
+            count: nodes.len() as u32,
+            pieces: vec![(Piece { nodes, shift: 0 }, 0)],
+            prims: vec![prims],
+        }
+    }
+}
+
+/// A task's tree so far, below [`PARALLEL_MIN`] references: child offsets are indices
+/// into `nodes`, leaf offsets into `prims`; `bins` is scratch.
+struct Out {
     nodes: Vec<BvhNode>,
     prims: Vec<u32>,
+    bins: Bins,
 }
 
 /// The binned-SAH tree over the triangles `positions` with spatial splits (see the
@@ -109,52 +149,141 @@ pub(super) fn build(positions: &[[Vec3; 3]], method: SplitMethod) -> Bvh {
         .map(|(i, b)| PrimRef::new(i, b))
         .collect();
     let root = NodeBounds::of(&refs);
-    let mut b = Builder {
+    let b = Builder {
         method,
         positions,
         min_overlap: ALPHA * root.node.surface_area(),
-        bins: Bins::empty(Box4::EMPTY),
-        nodes: Vec::with_capacity(super::node_estimate(refs.len())),
-        prims: Vec::with_capacity(refs.len()),
     };
     let budget = (BUDGET * refs.len() as f32) as usize;
-    b.node(refs, root, 1, budget);
+    let part = b.part(refs, root, 1, budget);
+    let pieces = part.pieces.into_iter().map(|(mut p, first)| {
+        for n in p.nodes.iter_mut().filter(|n| n.is_leaf()) {
+            n.offset += first;
+        }
+        p
+    });
     Bvh {
-        nodes: HugeVec::from(b.nodes),
-        prim_indices: HugeVec::from(b.prims),
+        nodes: assemble(pieces.collect(), part.count, Backing::Auto),
+        prim_indices: HugeVec::from(part.prims.concat()),
     }
 }
 
 impl Builder<'_> {
+    /// The subtree over `refs` (bounds `b`), which may add up to `budget` references by
+    /// spatial splits, leaf offsets counted from its first primitive. Sides of at
+    /// least [`PARALLEL_MIN`] references are built in parallel, each with its own
+    /// scratch; pieces and indices are joined in order, so the tree is the same whatever
+    /// the thread count.
+    fn part(&self, refs: Vec<PrimRef>, b: NodeBounds, depth: u32, budget: usize) -> Part {
+        let n = refs.len();
+        if n < PARALLEL_MIN {
+            let mut out = Out {
+                nodes: Vec::with_capacity(super::node_estimate(n + budget)),
+                prims: Vec::with_capacity(n + budget),
+                bins: Bins::empty(Box4::EMPTY),
+            };
+            self.node(&mut out, refs, b, depth, budget);
+            return Part::one(out.nodes, out.prims);
+        }
+        let mut bins = Bins::empty(Box4::EMPTY);
+        match self.step(refs, b, depth, budget, &mut bins) {
+            Step::Object(mut refs) => {
+                let (pieces, count) = build_subtree(self.method, &mut refs, 0, depth, b);
+                Part {
+                    pieces: pieces.into_iter().map(|p| (p, 0)).collect(),
+                    count,
+                    prims: vec![refs.iter().map(PrimRef::index).collect()],
+                }
+            }
+            Step::Leaf(refs) => Part::one(
+                vec![BvhNode::leaf(b.node.aabb(), 0, n as u32)],
+                refs.iter().map(PrimRef::index).collect(),
+            ),
+            Step::Split((left, right, lb, rb), left_budget, right_budget) => {
+                let (l, r) = rayon::join(
+                    || self.part(left, lb, depth + 1, left_budget),
+                    || self.part(right, rb, depth + 1, right_budget),
+                );
+                let mut pieces = Vec::with_capacity(1 + l.pieces.len() + r.pieces.len());
+                let top = vec![BvhNode::interior(b.node.aabb(), 1 + l.count)];
+                pieces.push((
+                    Piece {
+                        nodes: top,
+                        shift: 0,
+                    },
+                    0,
+                ));
+                let left_prims = l.prims.iter().map(Vec::len).sum::<usize>() as u32;
+                let shifted = |(p, first): (Piece, u32), by: u32, prims: u32| {
+                    let shift = p.shift + by;
+                    (Piece { shift, ..p }, first + prims)
+                };
+                pieces.extend(l.pieces.into_iter().map(|p| shifted(p, 1, 0)));
+                let right = r.pieces.into_iter();
+                pieces.extend(right.map(|p| shifted(p, 1 + l.count, left_prims)));
+                let mut prims = l.prims;
+                prims.extend(r.prims);
+                Part {
+                    pieces,
+                    count: 1 + l.count + r.count,
+                    prims,
+                }
+            }
+        }
+    }
+
     /// Appends the subtree over `refs` (bounds `b`), which may add up to `budget`
-    /// references by spatial splits.
-    fn node(&mut self, mut refs: Vec<PrimRef>, b: NodeBounds, depth: u32, budget: usize) {
+    /// references by spatial splits, to `out`.
+    fn node(&self, out: &mut Out, refs: Vec<PrimRef>, b: NodeBounds, depth: u32, budget: usize) {
+        match self.step(refs, b, depth, budget, &mut out.bins) {
+            Step::Object(mut refs) => {
+                let first = out.prims.len() as u32;
+                build_node(
+                    self.method,
+                    &mut refs,
+                    first,
+                    depth,
+                    b,
+                    &mut out.bins,
+                    &mut out.nodes,
+                );
+                out.prims.extend(refs.iter().map(PrimRef::index));
+            }
+            Step::Leaf(refs) => {
+                let first = out.prims.len() as u32;
+                out.nodes
+                    .push(BvhNode::leaf(b.node.aabb(), first, refs.len() as u32));
+                out.prims.extend(refs.iter().map(PrimRef::index));
+            }
+            Step::Split((left, right, lb, rb), left_budget, right_budget) => {
+                let me = out.nodes.len();
+                out.nodes.push(BvhNode::interior(b.node.aabb(), 0));
+                self.node(out, left, lb, depth + 1, left_budget);
+                out.nodes[me].offset = out.nodes.len() as u32;
+                self.node(out, right, rb, depth + 1, right_budget);
+            }
+        }
+    }
+
+    /// How the node over `refs` (bounds `b`), which may add up to `budget` references by
+    /// spatial splits, is built: its object split, or its spatial split where that
+    /// costs less, or a leaf.
+    fn step(
+        &self,
+        mut refs: Vec<PrimRef>,
+        b: NodeBounds,
+        depth: u32,
+        budget: usize,
+        bins: &mut Bins,
+    ) -> Step {
         let n = refs.len();
         // No part of a node overlaps more than its box, so below this no spatial split is
         // tried: the object build's, in place (no references copied) and in parallel.
         if budget == 0 || b.node.surface_area() <= self.min_overlap {
-            let (first, base) = (self.prims.len() as u32, self.nodes.len() as u32);
-            let (pieces, _) = build_subtree(self.method, &mut refs, first, depth, b);
-            for p in pieces {
-                // As `assemble` places them, after the nodes so far.
-                self.nodes.extend(p.nodes.iter().map(|&n| {
-                    let mut n = n;
-                    if !n.is_leaf() {
-                        n.offset += base + p.shift;
-                    }
-                    n
-                }));
-            }
-            self.prims.extend(refs.iter().map(PrimRef::index));
-            return;
+            return Step::Object(refs);
         }
-        let Some((mid, lb, rb, cost)) = split(self.method, &mut refs, b, depth, &mut self.bins)
-        else {
-            let first = self.prims.len() as u32;
-            self.nodes
-                .push(BvhNode::leaf(b.node.aabb(), first, n as u32));
-            self.prims.extend(refs.iter().map(PrimRef::index));
-            return;
+        let Some((mid, lb, rb, cost)) = split(self.method, &mut refs, b, depth, bins) else {
+            return Step::Leaf(refs);
         };
         let spatial = if cost.is_finite()
             && intersection(&lb.node, &rb.node).surface_area() > self.min_overlap
@@ -175,11 +304,7 @@ impl Builder<'_> {
         // The bins' counts bound the references added; rounding at the plane may add one.
         let rest = budget.saturating_sub(ln + rn - n);
         let left_budget = rest * ln / (ln + rn);
-        let me = self.nodes.len();
-        self.nodes.push(BvhNode::interior(b.node.aabb(), 0));
-        self.node(left, lb, depth + 1, left_budget);
-        self.nodes[me].offset = self.nodes.len() as u32;
-        self.node(right, rb, depth + 1, rest - left_budget);
+        Step::Split((left, right, lb, rb), left_budget, rest - left_budget)
     }
 
     /// The cheapest spatial plane of the node of box `node` over `refs`, if it costs
