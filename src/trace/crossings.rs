@@ -42,3 +42,40 @@ impl Crossings {
         all
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// One triangle met in two leaves and another surface at the same t, in the order a
+    /// traversal may meet them (A, B, A): sorted, the two equal crossings lie side by
+    /// side (the twin rule of `transmittance` counts them once), and the order is the
+    /// same whatever the order pushed, inline or spilled to the heap.
+    #[test]
+    fn equal_crossings_sort_side_by_side_whatever_the_order_met() {
+        let (a, b) = (
+            (0.5, 3, Vec2::new(0.25, 0.5)),
+            (0.5, 1, Vec2::new(0.75, 0.0)),
+        );
+        let far = (0.9, 2, Vec2::ZERO);
+        let sorted = |met: &[Crossing]| {
+            let mut c = Crossings::default();
+            for &m in met {
+                c.push(m);
+            }
+            c.sorted().to_vec()
+        };
+        let want = vec![b, a, a, far];
+        assert_eq!(sorted(&[a, b, a, far]), want);
+        assert_eq!(sorted(&[far, a, a, b]), want);
+        // Past the inline slots: nine crossings before these four.
+        let early: Vec<Crossing> = (0..9)
+            .map(|i| (0.01 * (i + 1) as f32, 0, Vec2::ZERO))
+            .collect();
+        let mut met = early.clone();
+        met.extend([a, b, a, far]);
+        let mut want_all = early;
+        want_all.extend(&want);
+        assert_eq!(sorted(&met), want_all);
+    }
+}
