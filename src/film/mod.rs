@@ -168,19 +168,12 @@ struct FilmPixels<'a> {
 /// Adds one sample per pixel of `pixels` (`values`, of the same length) and its moment;
 /// `odd` samples go to the replica too. Returns how many were dropped as not finite.
 #[multiversion(targets("x86_64+avx2+fma", "x86_64+sse4.2"))]
-fn add_samples(pixels: FilmPixels, values: &[Vec3], odd: bool) -> u64 {
-    let FilmPixels {
-        sum,
-        err,
-        count,
-        m2,
-        rsum,
-        rcount,
-    } = pixels;
+fn add_samples(mut pixels: FilmPixels, values: &[Vec3], odd: bool) -> u64 {
     // Every slice cut to the samples' length, so that the loop has no bounds checks.
     let n = values.len();
-    let (sum, err, count, m2) = (&mut sum[..n], &mut err[..n], &mut count[..n], &mut m2[..n]);
-    let (rsum, rcount) = (&mut rsum[..n], &mut rcount[..n]);
+    let p = &mut pixels;
+    let (sum, err, count) = (&mut p.sum[..n], &mut p.err[..n], &mut p.count[..n]);
+    let (m2, rsum, rcount) = (&mut p.m2[..n], &mut p.rsum[..n], &mut p.rcount[..n]);
     let mut dropped = 0;
     for i in 0..n {
         let c = values[i];
