@@ -263,6 +263,28 @@ fn a_closed_stdout_pipe_ends_the_cli_quietly() {
     assert!(!stderr.contains("panicked"), "{stderr}");
 }
 
+/// `glint stress 2>&1 | head -1`: the reader of standard error goes away after the first
+/// case's line; the next line ended in a panic (status 101) before.
+#[test]
+fn a_closed_stderr_pipe_ends_the_cli_quietly() {
+    use std::process::Stdio;
+    let mut child = Command::new(env!("CARGO_BIN_EXE_glint"))
+        .args(["stress", "--case", "scale"])
+        .stdout(Stdio::piped())
+        .stderr(Stdio::piped())
+        .spawn()
+        .unwrap();
+    drop(child.stderr.take());
+    let out = child.wait_with_output().unwrap();
+    assert_eq!(out.status.code(), Some(0), "{:?}", out.status);
+    // It ended at its first line to standard error, before the table.
+    assert!(
+        out.stdout.is_empty(),
+        "{}",
+        String::from_utf8_lossy(&out.stdout)
+    );
+}
+
 #[test]
 fn the_cli_bounds_threads_and_reads_zero_as_all_cores() {
     let (ok, stderr, _dir) = run_cli(Some(GOOD), &["render", "scene.ron", "--threads", "100000"]);

@@ -39,10 +39,10 @@ pub fn run(args: &ConvergeArgs) -> CliResult<Option<Interrupted>> {
         plot: args.plot.clone(),
         interrupt: Some(ctrl_c_flag()?),
     };
-    let report = glint::converge::run(&options, &mut |line| eprintln!("{line}"))?;
+    let report = glint::converge::run(&options, &mut |line| say!("{line}"))?;
     crate::print_stdout(&table(&report));
     if report.interrupted {
-        eprintln!("interrupted: the table, CSV and plot hold the passes measured so far");
+        say!("interrupted: the table, CSV and plot hold the passes measured so far");
     }
     Ok(report.interrupted.then_some(Interrupted))
 }

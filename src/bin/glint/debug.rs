@@ -28,10 +28,10 @@ pub fn run(cmd: &DebugCmd) -> CliResult<()> {
         },
     )?;
     for note in &outcome.notes {
-        eprintln!("note: {note}");
+        say!("note: {note}");
     }
     let c = outcome.pixel_color;
-    eprintln!(
+    say!(
         "{}: pixel {},{} = ({:.4}, {:.4}, {:.4}), {} debug entities",
         a.output.display(),
         a.pixel[0],

@@ -1,6 +1,14 @@
 //! The `glint` command line: parses arguments, calls the library, prints, maps errors to
 //! exit codes. Every clap type is in [`cli`]; each command has its own module.
 
+/// `eprintln!` through [`print_stderr`]: a closed standard error ends the program quietly
+/// instead of panicking. Defined before the modules, so that they can use it.
+macro_rules! say {
+    ($($arg:tt)*) => {
+        $crate::print_stderr(&format!($($arg)*))
+    };
+}
+
 mod cli;
 mod converge;
 mod debug;
@@ -10,6 +18,7 @@ mod stress;
 #[cfg(feature = "view")]
 mod view;
 
+use std::io::Write;
 use std::process::ExitCode;
 use std::sync::Arc;
 use std::sync::atomic::{AtomicBool, Ordering};
@@ -83,7 +92,7 @@ pub fn ctrl_c_flag() -> CliResult<Arc<AtomicBool>> {
         if handler_flag.swap(true, Ordering::SeqCst) {
             std::process::exit(130);
         }
-        eprintln!("\ninterrupted: finishing the region in flight (Ctrl-C again to quit now)");
+        say!("\ninterrupted: finishing the region in flight (Ctrl-C again to quit now)");
     })
     .map_err(|e| CliError::Failed(format!("cannot install the Ctrl-C handler: {e}")))?;
     Ok(flag)
@@ -113,13 +122,24 @@ fn info(args: &cli::SceneArgs) -> CliResult<()> {
 /// ends the program quietly, as it does for other command-line tools, instead of the
 /// panic `print!` raises on a closed pipe.
 pub fn print_stdout(text: &str) {
-    use std::io::Write;
-    let mut out = std::io::stdout().lock();
+    write_or_exit(&mut std::io::stdout().lock(), text, "standard output");
+}
+
+/// Writes `text` and a newline to standard error (progress, warnings, summaries), ending
+/// the program quietly as [`print_stdout`] does when the reader has gone away (`glint
+/// stress 2>&1 | head -1`), where `eprintln!` panics with status 101.
+pub fn print_stderr(text: &str) {
+    let line = format!("{text}\n");
+    write_or_exit(&mut std::io::stderr().lock(), &line, "standard error");
+}
+
+fn write_or_exit(out: &mut impl std::io::Write, text: &str, name: &str) {
     if let Err(e) = out.write_all(text.as_bytes()).and_then(|()| out.flush()) {
         if e.kind() == std::io::ErrorKind::BrokenPipe {
             std::process::exit(0);
         }
-        eprintln!("error: cannot write to standard output: {e}");
+        // Standard error may be the stream that failed: the status says it.
+        let _ = writeln!(std::io::stderr(), "error: cannot write to {name}: {e}");
         std::process::exit(1);
     }
 }
@@ -140,7 +160,8 @@ fn main() -> ExitCode {
         // The conventional status of a process stopped by SIGINT.
         Ok(Some(Interrupted)) => ExitCode::from(130),
         Err(e) => {
-            eprintln!("error: {e}");
+            // Not `say!`: a closed standard error must not turn the failure into success.
+            let _ = writeln!(std::io::stderr(), "error: {e}");
             ExitCode::FAILURE
         }
     }

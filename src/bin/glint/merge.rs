@@ -35,7 +35,7 @@ pub fn render_part(args: &RenderArgs) -> CliResult<Option<Interrupted>> {
     check_settings("--set", args.scene.set.iter().map(|(k, v)| (k, v)))?;
     let mut renderer = Renderer::from_file(&args.scene.scene, &args.scene.overrides())?;
     for w in renderer.warnings() {
-        eprintln!("warning: {w}");
+        say!("warning: {w}");
     }
     let camera = renderer.camera().expect("a loaded scene has a camera");
     let spp = renderer.samples_per_pixel();
@@ -58,12 +58,12 @@ pub fn render_part(args: &RenderArgs) -> CliResult<Option<Interrupted>> {
     let summary = renderer.render_part(samples.clone(), crop, &mut |n| bar.inc(n))?;
     bar.finish_and_clear();
     if summary.interrupted {
-        eprintln!("interrupted: no part written");
+        say!("interrupted: no part written");
         return Ok(Some(Interrupted));
     }
     write_part(&output, &renderer.part(hash, samples.clone(), crop))?;
     if !args.quiet {
-        eprintln!(
+        say!(
             "{}: part of samples {}..{}, crop {crop}: {summary}",
             output.display(),
             samples.start,
@@ -94,7 +94,7 @@ pub fn run(args: &MergeArgs) -> CliResult<()> {
     if args.part {
         write_part(&args.output, &merge_into_part(&parts)?)?;
         if !args.quiet {
-            eprintln!(
+            say!(
                 "{}: a part merged from {} parts",
                 args.output.display(),
                 parts.len()
@@ -112,7 +112,7 @@ pub fn run(args: &MergeArgs) -> CliResult<()> {
     let total = samples.end;
     let settings = parts[0].1.info.parsed_settings();
     if let Some(full) = parts[0].1.info.full_samples().filter(|&full| total < full) {
-        eprintln!(
+        say!(
             "warning: the parts hold samples 0..{total} of the {full} a full render takes (pixel_samples): the image is noisier than a single render's"
         );
     }
@@ -133,7 +133,7 @@ pub fn run(args: &MergeArgs) -> CliResult<()> {
             .and_then(|s| film.error_estimate(EstimateMethod::for_settings(&s)))
             .map(|e| format!("; estimated error: {e}"))
             .unwrap_or_default();
-        eprintln!(
+        say!(
             "{}: {}x{}, {total} spp, merged from {} parts{estimate}",
             args.output.display(),
             film.width,

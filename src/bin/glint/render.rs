@@ -79,7 +79,7 @@ pub fn run(args: &RenderArgs) -> CliResult<Option<Interrupted>> {
     check_settings("--set", args.scene.set.iter().map(|(k, v)| (k, v)))?;
     let mut renderer = Renderer::from_file(&args.scene.scene, &args.scene.overrides())?;
     for w in renderer.warnings() {
-        eprintln!("warning: {w}");
+        say!("warning: {w}");
     }
     renderer.set_interrupt(ctrl_c_flag()?);
     let camera = renderer.camera().expect("a loaded scene has a camera");
@@ -109,7 +109,7 @@ pub fn run(args: &RenderArgs) -> CliResult<Option<Interrupted>> {
         film.count.iter().copied().max().unwrap_or(0),
     );
     if summary.interrupted && most == 0 {
-        eprintln!("interrupted before the first sample: no image written");
+        say!("interrupted before the first sample: no image written");
         return Ok(Some(Interrupted));
     }
     let encoding = if args.srgb {
@@ -133,7 +133,7 @@ pub fn run(args: &RenderArgs) -> CliResult<Option<Interrupted>> {
         } else {
             format!("{least} to {most} samples per pixel (the last pass was cut short)")
         };
-        eprintln!(
+        say!(
             "interrupted: {} holds {held}, {} complete passes of {}",
             output.display(),
             summary.samples,
@@ -142,7 +142,7 @@ pub fn run(args: &RenderArgs) -> CliResult<Option<Interrupted>> {
         return Ok(Some(Interrupted));
     }
     if !args.quiet {
-        eprintln!("{}: {summary}", output.display());
+        say!("{}: {summary}", output.display());
     }
     Ok(None)
 }

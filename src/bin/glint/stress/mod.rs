@@ -295,7 +295,7 @@ pub fn run(args: &StressArgs) -> CliResult<()> {
         let start = std::time::Instant::now();
         let r = run_case(case, &budget);
         let failed = r.iter().filter(|r| !r.pass).count();
-        eprintln!(
+        say!(
             "{:<12} {:>6.2} s  {}",
             case.name,
             start.elapsed().as_secs_f64(),
