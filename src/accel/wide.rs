@@ -197,22 +197,23 @@ impl WideBvh {
             .collect()
     }
 
-    /// Visits the leaves the ray of `boxes` meets in near-to-far order of their boxes'
-    /// entry distances while they start before `*t_max` (`NEAREST_FIRST`), or each
-    /// node's leaves before its interior children without sorting (for any-hit
-    /// queries, where order does not decide the answer); `visitor.leaf(first, count,
+    /// Visits the leaves below node `root` (0: the whole tree) the ray of `boxes` meets
+    /// in near-to-far order of their boxes' entry distances while they start before
+    /// `*t_max` (`NEAREST_FIRST`), or each node's leaves before its interior children
+    /// without sorting (for any-hit queries, where order does not decide the answer); `visitor.leaf(first, count,
     /// t_max)` may lower `t_max` and returns true to stop. Returns whether a leaf
     /// stopped it.
     #[inline(always)]
     pub(super) fn traverse<const NEAREST_FIRST: bool>(
         &self,
+        root: u32,
         boxes: &RayBoxes,
         t_max: &mut f32,
         visitor: &mut impl LeafVisitor,
     ) -> bool {
         // No test of the root's own box: the root's test of its children's boxes culls
         // the same rays (a box inside another is met only by rays that meet that one),
-        // and most rays meet it anyway.
+        // and most rays meet it anyway (a packet hands over a node whose box it met).
         if self.nodes.is_empty() {
             return false;
         }
@@ -220,7 +221,7 @@ impl WideBvh {
         // The node to visit: the root, then a node's nearest interior child (any-hit:
         // its last, which would be popped first) without a round trip through the
         // stack, else the top of the stack.
-        let mut index = 0;
+        let mut index = root;
         // Lane indices below are taken `% WIDTH` (a no-op: masks have WIDTH bits) so
         // that the compiler drops the bounds checks on the node's lane arrays: 1,528 /
         // 1,914 -> 1,515 / 1,898 instructions per primary / incoherent ray (torus 100k).

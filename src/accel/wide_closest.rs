@@ -13,18 +13,31 @@ pub(super) struct ClosestLeaves<'a> {
 }
 
 /// The closest-hit query's best hit so far and its bounds.
-pub(super) struct Best {
+#[derive(Clone, Copy)]
+pub(in crate::accel) struct Best {
     /// The best hit: where the triangle sits in the leaves (`group * LANES + lane`), its
     /// index and the hit.
-    pub(super) hit: Option<(usize, u32, TriangleHit)>,
+    pub(in crate::accel) hit: Option<(usize, u32, TriangleHit)>,
     /// The query's own t_max.
-    pub(super) limit: f32,
+    pub(in crate::accel) limit: f32,
     /// Past the best t so far by more than the rounding of the triangle test's scaled
     /// early-out (t_scaled against bound * det, three roundings): then every triangle
     /// with t at or below the best passes it whatever the order of the leaves, and the
     /// comparison below alone decides, so the hit is the least (t, index) of the
     /// triangles hit before `limit`. It changes only with the best hit.
-    pub(super) bound: f32,
+    pub(in crate::accel) bound: f32,
+}
+
+impl Best {
+    /// No hit yet, for a query bounded by `t_max`.
+    #[inline(always)]
+    pub(in crate::accel) fn new(t_max: f32) -> Best {
+        Best {
+            hit: None,
+            limit: t_max,
+            bound: t_max,
+        }
+    }
 }
 
 impl LeafVisitor for ClosestLeaves<'_> {

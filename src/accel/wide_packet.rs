@@ -21,6 +21,8 @@
 //!   division; the scalar test (`intersect_triangle_flagged`, with the leaf's
 //!   degenerate flag) decides each (ray, triangle) it keeps, and a ray leaves the
 //!   packet's active mask at its first hit.
+//! - An entry left with a few rays hands each to the single-ray query below its node
+//!   (`hand_over`), which finds the same answer (least (t, index) hit, or any hit).
 //! - The any-hit query first culls the root's children by the box of the packet's ray
 //!   segments (`segment_box`), which drops only children the box test rejects for
 //!   every ray; a packet left with none ends there, before any per-ray setup.
@@ -521,6 +523,7 @@ impl WideBvh {
     fn occluded_sub_packet(&self, p: &PacketRays, s: &Shear, rays: u32, root: u32) -> u32 {
         let mut active = rays;
         let mut stack: ArrayVec<(u32, u32), STACK_SIZE> = ArrayVec::new();
+        let hand_over = self.hand_over_rays();
         let mut next = Some((0u32, active));
         loop {
             let Some((index, mask)) = next.take().or_else(|| stack.pop()) else {
@@ -529,6 +532,13 @@ impl WideBvh {
             // Rays occluded since this entry was pushed are done.
             let mask = mask & active;
             if mask == 0 {
+                continue;
+            }
+            if mask.count_ones() <= hand_over {
+                active &= !p.occluded_below(self, index, mask);
+                if active == 0 {
+                    return rays;
+                }
                 continue;
             }
             let node = &self.nodes[index as usize];
@@ -613,6 +623,7 @@ impl WideBvh {
         best: &mut HitLanes,
     ) {
         let mut stack: ArrayVec<(u32, u32, Lanes), STACK_SIZE> = ArrayVec::new();
+        let hand_over = self.hand_over_rays();
         let mut next = Some((0u32, rays, [0.0f32; PACKET]));
         loop {
             let Some((index, mask, t_entry)) = next.take().or_else(|| stack.pop()) else {
@@ -621,6 +632,10 @@ impl WideBvh {
             // Rays whose closest hit so far lies before this box skip it.
             let mask = mask & p.within::<false>(&t_entry);
             if mask == 0 {
+                continue;
+            }
+            if mask.count_ones() <= hand_over {
+                p.closest_below(self, index, mask, limit, best);
                 continue;
             }
             let node = &self.nodes[index as usize];
@@ -674,6 +689,9 @@ impl WideBvh {
 
 #[path = "wide_packet_decide.rs"]
 mod decide;
+
+#[path = "wide_packet_hand_over.rs"]
+mod hand_over;
 
 #[cfg(test)]
 #[path = "wide_packet_tests.rs"]

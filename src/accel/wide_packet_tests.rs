@@ -448,3 +448,13 @@ fn the_segment_box_culls_nothing_for_rays_it_does_not_cover() {
         assert!(SegmentBox::of(&lanes, &t_max).is_some(), "{o} {d} {t}");
     }
 }
+
+/// The tests above run through the hand-over to single rays (their scene's tree is deep
+/// enough), while a tree of a few triangles keeps its packets whole.
+#[test]
+fn packets_hand_over_few_rays_in_deep_trees_only() {
+    let (_, wide) = scene();
+    assert!(wide.hand_over_rays() > 0, "depth {}", wide.depth);
+    let few: Vec<Tri> = scene().0.into_iter().take(20).collect();
+    assert_eq!(build(&few).hand_over_rays(), 0);
+}

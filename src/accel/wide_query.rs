@@ -23,8 +23,9 @@ use super::{BOX_MARGIN, HitLanes, Ray, RayLanes, WideBvh};
 
 #[path = "wide_closest.rs"]
 mod closest;
+pub(super) use closest::Best;
+use closest::ClosestLeaves;
 pub(super) use closest::three_ulps_up;
-use closest::{Best, ClosestLeaves};
 
 /// What a query does at each leaf the traversal reaches.
 pub(super) trait LeafVisitor {
@@ -197,14 +198,15 @@ impl WideBvh {
     /// instructions per ray).
     #[inline]
     pub fn closest_hit(&self, ray: &Ray, t_max: f32) -> Option<(u32, TriangleHit)> {
-        closest_hit_dispatched(self, ray, t_max).map(|(p, _, h)| (p, h))
+        self.closest_hit_at(ray, t_max).map(|(p, _, h)| (p, h))
     }
 
     /// [`Self::closest_hit`] with where the triangle's vertices sit in `leaves`
     /// (`group * LANES + lane`, for [`WideBvh::triangle_at`]): (prim, lane, hit).
     #[inline]
     pub fn closest_hit_at(&self, ray: &Ray, t_max: f32) -> Option<(u32, u32, TriangleHit)> {
-        closest_hit_dispatched(self, ray, t_max)
+        let (lane, prim, h) = closest_hit_dispatched(self, ray, 0, Best::new(t_max), t_max).hit?;
+        Some((prim, lane as u32, h))
     }
 
     /// [`Self::closest_hit_at`] compiled for whatever target features the caller has.
@@ -215,56 +217,61 @@ impl WideBvh {
         ray: &Ray,
         t_max: f32,
     ) -> Option<(u32, u32, TriangleHit)> {
-        self.closest_hit_with(
-            ray,
-            t_max,
-            |leaves, group, count, t_max| leaves.leaf(group, count, t_max),
-            |leaves, pair, far_entry, t_max| {
-                leaves.pair(
-                    pair,
-                    far_entry,
-                    t_max,
-                    |leaves, group, count, t_max| leaves.leaf(group, count, t_max),
-                    |leaves, best, groups, t_max| leaves.closest_pair(best, groups, t_max),
-                )
-            },
-            |_| {},
-        )
+        let (lane, prim, h) = self
+            .closest_hit_with(
+                ray,
+                0,
+                Best::new(t_max),
+                t_max,
+                |leaves, group, count, t_max| leaves.leaf(group, count, t_max),
+                |leaves, pair, far_entry, t_max| {
+                    leaves.pair(
+                        pair,
+                        far_entry,
+                        t_max,
+                        |leaves, group, count, t_max| leaves.leaf(group, count, t_max),
+                        |leaves, best, groups, t_max| leaves.closest_pair(best, groups, t_max),
+                    )
+                },
+                |_| {},
+            )
+            .hit?;
+        Some((prim, lane as u32, h))
     }
 
-    /// [`Self::closest_hit_inlined`] with the leaf test `test(leaves, group, count,
-    /// t_max)`: `leaves.leaf(group, count, t_max)`, inlined or called; `line(address)`
-    /// prefetches a cache line (or does nothing).
+    /// The closest-hit query of `ray` below node `root` (0: the whole tree) from the
+    /// best hit so far `best` and the cull distance `cull` (the best hit's t, or the
+    /// query's bound): the best hit after it. With the leaf test `test(leaves, group,
+    /// count, t_max)`: `leaves.leaf(group, count, t_max)`, inlined or called;
+    /// `line(address)` prefetches a cache line (or does nothing).
     #[inline(always)]
+    #[allow(clippy::too_many_arguments)] // The query's state and its three leaf calls.
     fn closest_hit_with(
         &self,
         ray: &Ray,
-        t_max: f32,
+        root: u32,
+        best: Best,
+        cull: f32,
         test: impl FnMut(&mut ClosestLeaves, usize, u32, &mut f32) -> bool,
         pair: impl FnMut(&mut ClosestLeaves, [(usize, u32); 2], f32, &mut f32) -> bool,
         line: impl Fn(*const u8),
-    ) -> Option<(u32, u32, TriangleHit)> {
+    ) -> Best {
         // One division for the box test's inverse direction and the shear's scale.
         let inv = ray.dir.recip().to_array();
         let boxes = RayBoxes::with_inverse(ray, inv);
         let mut leaves = ClosestLeaves {
             leaves: RayLeaves::new(self, ray, inv),
-            best: Best {
-                hit: None,
-                limit: t_max,
-                bound: t_max,
-            },
+            best,
         };
-        let mut cull = t_max;
+        let mut cull = cull;
         let mut visitor = Calls {
             leaves: &mut leaves,
             test,
             pair,
             line,
         };
-        self.traverse::<true>(&boxes, &mut cull, &mut visitor);
-        let (lane, prim, h) = leaves.best.hit?;
-        Some((prim, lane as u32, h))
+        self.traverse::<true>(root, &boxes, &mut cull, &mut visitor);
+        leaves.best
     }
 
     /// Visits triangles the ray meets in (0, t_max), in no particular order, until
@@ -275,7 +282,7 @@ impl WideBvh {
         t_max: f32,
         mut visit: impl FnMut(u32, &TriangleHit) -> bool,
     ) -> bool {
-        any_hit_dispatched(self, ray, t_max, &mut visit)
+        any_hit_dispatched(self, ray, 0, t_max, &mut visit)
     }
 
     /// [`Self::any_hit`] compiled for whatever target features the caller has.
@@ -283,6 +290,7 @@ impl WideBvh {
     pub(super) fn any_hit_inlined(
         &self,
         ray: &Ray,
+        root: u32,
         t_max: f32,
         visit: impl FnMut(u32, &TriangleHit) -> bool,
     ) -> bool {
@@ -294,7 +302,7 @@ impl WideBvh {
             visit,
         };
         let mut cull = t_max;
-        self.traverse::<false>(&boxes, &mut cull, &mut leaves)
+        self.traverse::<false>(root, &boxes, &mut cull, &mut leaves)
     }
 
     /// For up to [`PACKET`] rays at once (a packet, traced with one ray
@@ -381,16 +389,19 @@ impl<'a> RayLeaves<'a> {
 // would pay for the flag. The any-hit v4 clone has no zmm instruction; a change to it
 // should keep it so (`objdump -d` of the clone, `grep zmm`).
 
-/// [`WideBvh::closest_hit`] for the best instruction set the CPU has. (Its inner
-/// functions reach the query through closures: a function with target features
-/// implements no `Fn` trait, whatever clippy's `redundant_closure` says.)
+/// [`WideBvh::closest_hit_with`] for the best instruction set the CPU has: the query
+/// from the root, or a packet's ray handed over below a node. (Its inner functions
+/// reach the query through closures: a function with target features implements no
+/// `Fn` trait, whatever clippy's `redundant_closure` says.)
 #[multiversion(targets("x86_64+avx2+fma", "x86_64+sse4.2"))]
 #[allow(clippy::redundant_closure)]
-fn closest_hit_dispatched(
+pub(super) fn closest_hit_dispatched(
     wide: &WideBvh,
     ray: &Ray,
-    t_max: f32,
-) -> Option<(u32, u32, TriangleHit)> {
+    root: u32,
+    best: Best,
+    cull: f32,
+) -> Best {
     /// The test of a leaf of several groups (or one with the degenerate flag) out of
     /// line (but compiled for this clone's instruction set): the traversal's loop,
     /// without the leaf test's many values, then keeps the box test's per-ray
@@ -478,7 +489,9 @@ fn closest_hit_dispatched(
     }
     wide.closest_hit_with(
         ray,
-        t_max,
+        root,
+        best,
+        cull,
         |leaves, first, count, t_max| one(leaves, first, count, t_max),
         |leaves, leaf_pair, far_entry, t_max| {
             leaves.pair(
@@ -493,19 +506,21 @@ fn closest_hit_dispatched(
     )
 }
 
-/// [`WideBvh::any_hit`] for the best instruction set the CPU has.
+/// [`WideBvh::any_hit_inlined`] for the best instruction set the CPU has: the query
+/// from the root, or a packet's ray handed over below a node.
 #[multiversion(targets(
     "x86_64+avx512f+avx512bw+avx512cd+avx512dq+avx512vl+avx2+fma",
     "x86_64+avx2+fma",
     "x86_64+sse4.2"
 ))]
-fn any_hit_dispatched(
+pub(super) fn any_hit_dispatched(
     wide: &WideBvh,
     ray: &Ray,
+    root: u32,
     t_max: f32,
     visit: &mut dyn FnMut(u32, &TriangleHit) -> bool,
 ) -> bool {
-    wide.any_hit_inlined(ray, t_max, visit)
+    wide.any_hit_inlined(ray, root, t_max, visit)
 }
 
 /// [`WideBvh::occluded_packet`] for the best instruction set the CPU has (the rays are

@@ -345,7 +345,7 @@ fn dispatched_queries_match_the_baseline_build_bit_for_bit() {
                 fast.push((p, h.t.to_bits()));
                 false
             });
-            wide.any_hit_inlined(&ray, t_max, |p, h| {
+            wide.any_hit_inlined(&ray, 0, t_max, |p, h| {
                 base.push((p, h.t.to_bits()));
                 false
             });
@@ -632,7 +632,7 @@ fn closest_hit_traversal_visits_the_nearest_cluster_alone() {
                     visited: Vec::new(),
                 };
                 let mut t_max = f32::INFINITY;
-                wide.traverse::<true>(&RayBoxes::new(&ray), &mut t_max, &mut visitor);
+                wide.traverse::<true>(0, &RayBoxes::new(&ray), &mut t_max, &mut visitor);
                 assert_eq!(t_max, 1.0, "{rows}x{columns} clusters, {ray:?}");
                 for &(lo, hi) in &visitor.visited {
                     assert!(
