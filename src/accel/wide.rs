@@ -200,9 +200,9 @@ impl WideBvh {
     /// Visits the leaves below node `root` (0: the whole tree) the ray of `boxes` meets
     /// in near-to-far order of their boxes' entry distances while they start before
     /// `*t_max` (`NEAREST_FIRST`), or each node's leaves before its interior children
-    /// without sorting (for any-hit queries, where order does not decide the answer); `visitor.leaf(first, count,
-    /// t_max)` may lower `t_max` and returns true to stop. Returns whether a leaf
-    /// stopped it.
+    /// without sorting (for any-hit queries, where order does not decide the answer);
+    /// `visitor.leaf(first, count, t_max)` may lower `t_max` and returns true to stop.
+    /// Returns whether a leaf stopped it.
     #[inline(always)]
     pub(super) fn traverse<const NEAREST_FIRST: bool>(
         &self,

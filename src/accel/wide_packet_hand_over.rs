@@ -10,7 +10,6 @@
 use glam::Vec3;
 
 use super::{Lanes, PacketRays};
-use crate::accel::triangle::TriangleHit;
 use crate::accel::wide_query::{Best, any_hit_dispatched, closest_hit_dispatched};
 use crate::accel::{HitLanes, Ray, WideBvh};
 
@@ -77,16 +76,7 @@ impl PacketRays {
         best: &mut HitLanes,
     ) {
         let ray = self.ray(r);
-        let hit = (best.found & (1 << r) != 0).then(|| {
-            let b = &best.bary;
-            let h = TriangleHit {
-                t: best.t[r],
-                b0: b[0][r],
-                b1: b[1][r],
-                b2: b[2][r],
-            };
-            (best.lane[r] as usize, best.prim[r], h)
-        });
+        let hit = best.get(r).map(|(prim, slot, h)| (slot as usize, prim, h));
         let before = Best {
             hit,
             limit: limit[r],

@@ -133,7 +133,7 @@ pub fn print_stderr(text: &str) {
     write_or_exit(&mut std::io::stderr().lock(), &line, "standard error");
 }
 
-fn write_or_exit(out: &mut impl std::io::Write, text: &str, name: &str) {
+fn write_or_exit(out: &mut impl Write, text: &str, name: &str) {
     if let Err(e) = out.write_all(text.as_bytes()).and_then(|()| out.flush()) {
         if e.kind() == std::io::ErrorKind::BrokenPipe {
             std::process::exit(0);
