@@ -243,46 +243,55 @@ fn info_explains_the_plan() {
     assert!(text.contains("sobol sampler"), "{text}");
 }
 
-/// `glint info scene.ron | head -1`: the reader closes the pipe before glint writes.
-#[test]
-fn a_closed_stdout_pipe_ends_the_cli_quietly() {
+/// Runs the CLI in `dir` with the read end of standard output or error closed before it
+/// writes, as `| head -1` or `2>&1 | head -1` leave it; returns the output it produced.
+fn run_cli_closing(dir: &TempDir, args: &[&str], close_stdout: bool) -> std::process::Output {
     use std::process::Stdio;
-    let dir = scene_dir(GOOD);
     let mut child = Command::new(env!("CARGO_BIN_EXE_glint"))
         .current_dir(dir.path())
-        .args(["info", "scene.ron"])
+        .args(args)
         .stdout(Stdio::piped())
         .stderr(Stdio::piped())
         .spawn()
         .unwrap();
     // Closing the read end now, before glint has loaded the scene, makes its write fail.
-    drop(child.stdout.take());
-    let out = child.wait_with_output().unwrap();
+    if close_stdout {
+        drop(child.stdout.take());
+    } else {
+        drop(child.stderr.take());
+    }
+    child.wait_with_output().unwrap()
+}
+
+/// `glint info scene.ron | head -1`: the reader closes the pipe before glint writes.
+#[test]
+fn a_closed_stdout_pipe_ends_the_cli_quietly() {
+    let out = run_cli_closing(&scene_dir(GOOD), &["info", "scene.ron"], true);
     let stderr = String::from_utf8_lossy(&out.stderr);
     assert!(out.status.success(), "status {:?}: {stderr}", out.status);
     assert!(!stderr.contains("panicked"), "{stderr}");
 }
 
-/// `glint stress 2>&1 | head -1`: the reader of standard error goes away after the first
-/// case's line; the next line ended in a panic (status 101) before.
+/// Standard error carries only diagnostics: with its reader gone, a render still writes
+/// its image and `stress` its table, where `eprintln!` panicked (status 101) before.
 #[test]
-fn a_closed_stderr_pipe_ends_the_cli_quietly() {
-    use std::process::Stdio;
-    let mut child = Command::new(env!("CARGO_BIN_EXE_glint"))
-        .args(["stress", "--case", "scale"])
-        .stdout(Stdio::piped())
-        .stderr(Stdio::piped())
-        .spawn()
-        .unwrap();
-    drop(child.stderr.take());
-    let out = child.wait_with_output().unwrap();
+fn a_closed_stderr_pipe_loses_no_output() {
+    // A scene without lights: its warning is written before the render starts.
+    let unlit = GOOD.replace("PointLight((position: (0, 2, 2), color: (1, 1, 1))),", "");
+    let dir = scene_dir(&unlit);
+    let out = run_cli_closing(&dir, &["render", "scene.ron", "-o", "out.png"], false);
     assert_eq!(out.status.code(), Some(0), "{:?}", out.status);
-    // It ended at its first line to standard error, before the table.
-    assert!(
-        out.stdout.is_empty(),
-        "{}",
-        String::from_utf8_lossy(&out.stdout)
-    );
+    let img = image::open(dir.path().join("out.png")).unwrap();
+    assert_eq!((img.width(), img.height()), (8, 8));
+
+    let out = run_cli_closing(&dir, &["stress", "--case", "scale"], false);
+    assert_eq!(out.status.code(), Some(0), "{:?}", out.status);
+    let table = String::from_utf8_lossy(&out.stdout);
+    assert!(table.contains("| pass |"), "{table}");
+
+    // A failure stays a failure when its message cannot be read.
+    let out = run_cli_closing(&dir, &["render", "missing.ron"], false);
+    assert_eq!(out.status.code(), Some(1), "{:?}", out.status);
 }
 
 #[test]

@@ -1,8 +1,8 @@
 //! The `glint` command line: parses arguments, calls the library, prints, maps errors to
 //! exit codes. Every clap type is in [`cli`]; each command has its own module.
 
-/// `eprintln!` through [`print_stderr`]: a closed standard error ends the program quietly
-/// instead of panicking. Defined before the modules, so that they can use it.
+/// `eprintln!` through [`print_stderr`]: a closed standard error is ignored instead of
+/// panicking. Defined before the modules, so that they can use it.
 macro_rules! say {
     ($($arg:tt)*) => {
         $crate::print_stderr(&format!($($arg)*))
@@ -122,26 +122,22 @@ fn info(args: &cli::SceneArgs) -> CliResult<()> {
 /// ends the program quietly, as it does for other command-line tools, instead of the
 /// panic `print!` raises on a closed pipe.
 pub fn print_stdout(text: &str) {
-    write_or_exit(&mut std::io::stdout().lock(), text, "standard output");
-}
-
-/// Writes `text` and a newline to standard error (progress, warnings, summaries), ending
-/// the program quietly as [`print_stdout`] does when the reader has gone away (`glint
-/// stress 2>&1 | head -1`), where `eprintln!` panics with status 101.
-pub fn print_stderr(text: &str) {
-    let line = format!("{text}\n");
-    write_or_exit(&mut std::io::stderr().lock(), &line, "standard error");
-}
-
-fn write_or_exit(out: &mut impl Write, text: &str, name: &str) {
+    let mut out = std::io::stdout().lock();
     if let Err(e) = out.write_all(text.as_bytes()).and_then(|()| out.flush()) {
         if e.kind() == std::io::ErrorKind::BrokenPipe {
             std::process::exit(0);
         }
-        // Standard error may be the stream that failed: the status says it.
-        let _ = writeln!(std::io::stderr(), "error: cannot write to {name}: {e}");
+        print_stderr(&format!("error: cannot write to standard output: {e}"));
         std::process::exit(1);
     }
+}
+
+/// Writes `text` and a newline to standard error (progress, warnings, summaries). These
+/// are diagnostics: if their reader has gone away (`glint render 2>&1 | head -1`) the
+/// work goes on and its file is still written, where `eprintln!` would panic (status 101).
+pub fn print_stderr(text: &str) {
+    let mut err = std::io::stderr().lock();
+    let _ = writeln!(err, "{text}").and_then(|()| err.flush());
 }
 
 fn main() -> ExitCode {
@@ -160,8 +156,7 @@ fn main() -> ExitCode {
         // The conventional status of a process stopped by SIGINT.
         Ok(Some(Interrupted)) => ExitCode::from(130),
         Err(e) => {
-            // Not `say!`: a closed standard error must not turn the failure into success.
-            let _ = writeln!(std::io::stderr(), "error: {e}");
+            say!("error: {e}");
             ExitCode::FAILURE
         }
     }
