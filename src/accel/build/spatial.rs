@@ -16,6 +16,7 @@
 //! are joined in order, so the tree is the same whatever the thread count.
 
 use glam::Vec3;
+use multiversion::multiversion;
 use wide::f32x4;
 
 use super::bins::Bins;
@@ -288,11 +289,11 @@ impl Builder<'_> {
         let spatial = if cost.is_finite()
             && intersection(&lb.node, &rb.node).surface_area() > self.min_overlap
         {
-            self.spatial_plane(&refs, &b.node, cost, budget)
+            spatial_plane(self.positions, &refs, &b.node, cost, budget)
         } else {
             None
         };
-        let (left, right, lb, rb) = match spatial.and_then(|p| self.cut(&refs, &p)) {
+        let (left, right, lb, rb) = match spatial.and_then(|p| cut(self.positions, &refs, &p)) {
             Some(sides) => sides,
             None => {
                 let right = refs.split_off(mid);
@@ -306,132 +307,147 @@ impl Builder<'_> {
         let left_budget = rest * ln / (ln + rn);
         Step::Split((left, right, lb, rb), left_budget, rest - left_budget)
     }
+}
 
-    /// The cheapest spatial plane of the node of box `node` over `refs`, if it costs
-    /// less than `object_cost` and adds at most `budget` references. Planes on the
-    /// node's widest axis only: on Sponza all three cost 70% more build instructions
-    /// (384.6M rather than 226.1M) for as many per ray (incoherent 1,444 rather than
-    /// 1,440, primary 437 rather than 425, shadow 658 rather than 665).
-    fn spatial_plane(
-        &self,
-        refs: &[PrimRef],
-        node: &Box4,
-        object_cost: f32,
-        budget: usize,
-    ) -> Option<SpatialPlane> {
-        let axis = node.aabb().extent().max_position();
-        let lo = node.min[axis];
-        let step = (node.max[axis] - lo) / SPATIAL_BINS as f32;
-        // A flat node (or an infinite one, whose step is NaN) has no plane.
-        if step.is_nan() || step <= 0.0 {
-            return None;
-        }
-        if !has_long(&node.aabb(), |axis| {
-            refs.iter().map(move |r| -(r.lo[axis] + r.neg_hi[axis]))
-        }) {
-            return None;
-        }
-        let plane = |k: usize| lo + k as f32 * step;
-        // Both corners' bins at once, clamped as floats (NaN to bin 0), then truncated.
-        let (min, scale) = (f32x4::splat(lo), f32x4::splat(1.0 / step));
-        let last_bin = f32x4::splat((SPATIAL_BINS - 1) as f32);
-        let bins_of = |r: &PrimRef| {
-            let x = f32x4::from([r.lo[axis], -r.neg_hi[axis], 0.0, 0.0]);
-            let k = ((x - min) * scale).fast_max(f32x4::ZERO).fast_min(last_bin);
-            let [first, last, ..] = k.fast_trunc_int().to_array();
-            (first as usize % SPATIAL_BINS, last as usize % SPATIAL_BINS)
-        };
-        let mut bins = [SpatialBin {
-            bounds: Box4::EMPTY,
-            enter: 0,
-            exit: 0,
-        }; SPATIAL_BINS];
-        for r in refs {
-            let tri = &self.positions[r.index() as usize];
-            let (first, last) = bins_of(r);
-            bins[first].enter += 1;
-            bins[last].exit += 1;
-            let mut rest = r.box4();
-            for (k, bin) in (first + 1..).zip(&mut bins[first..last]) {
-                let (l, r) = clip::<false>(tri, &rest, axis, plane(k));
-                bin.bounds = bin.bounds.union(l);
-                rest = r;
-            }
-            bins[last].bounds = bins[last].bounds.union(rest);
-        }
-        // Right sides first (the plane before bin k), then the sweep from the left.
-        let mut right = [(Box4::EMPTY, 0u32); SPATIAL_BINS];
-        let mut acc = (Box4::EMPTY, 0);
-        for k in (1..SPATIAL_BINS).rev() {
-            acc = (acc.0.union(bins[k].bounds), acc.1 + bins[k].exit);
-            right[k] = acc;
-        }
-        let mut best: Option<(f32, SpatialPlane)> = None;
-        let mut left = (Box4::EMPTY, 0u32);
-        for k in 1..SPATIAL_BINS {
-            left = (left.0.union(bins[k - 1].bounds), left.1 + bins[k - 1].enter);
-            let r = right[k];
-            if left.1 == 0 || r.1 == 0 || (left.1 + r.1) as usize > refs.len() + budget {
-                continue;
-            }
-            let cost = left.0.surface_area() * blocks(left.1) + r.0.surface_area() * blocks(r.1);
-            if cost < best.as_ref().map_or(object_cost, |b| b.0) {
-                let p = SpatialPlane {
-                    axis,
-                    pos: plane(k),
-                    left,
-                    right: r,
-                };
-                best = Some((cost, p));
-            }
-        }
-        best.map(|b| b.1)
+/// The cheapest spatial plane of the node of box `node` over `refs`, if it costs
+/// less than `object_cost` and adds at most `budget` references. Planes on the
+/// node's widest axis only: on Sponza all three cost 70% more build instructions
+/// (384.6M rather than 226.1M) for as many per ray (incoherent 1,444 rather than
+/// 1,440, primary 437 rather than 425, shadow 658 rather than 665).
+///
+/// This and [`cut`] are compiled once per instruction set, picked at run time, as the
+/// object split's [`split`] is: as methods of the builder they ran as baseline SSE2,
+/// where each `f32::min` / `max` of their boxes is a compare, a min and a blend of
+/// and/andnot/or. Every step is exact, so each clone finds the same planes. (Sponza,
+/// one thread: 135.8M -> 124.9M instructions per build.)
+#[multiversion(targets("x86_64+avx2+fma", "x86_64+sse4.2"))]
+fn spatial_plane(
+    positions: &[[Vec3; 3]],
+    refs: &[PrimRef],
+    node: &Box4,
+    object_cost: f32,
+    budget: usize,
+) -> Option<SpatialPlane> {
+    let axis = node.aabb().extent().max_position();
+    let lo = node.min[axis];
+    let step = (node.max[axis] - lo) / SPATIAL_BINS as f32;
+    // A flat node (or an infinite one, whose step is NaN) has no plane.
+    if step.is_nan() || step <= 0.0 {
+        return None;
     }
+    if !has_long(&node.aabb(), |axis| {
+        refs.iter().map(move |r| -(r.lo[axis] + r.neg_hi[axis]))
+    }) {
+        return None;
+    }
+    let plane = |k: usize| lo + k as f32 * step;
+    // Both corners' bins at once, clamped as floats (NaN to bin 0), then truncated.
+    let (min, scale) = (f32x4::splat(lo), f32x4::splat(1.0 / step));
+    let last_bin = f32x4::splat((SPATIAL_BINS - 1) as f32);
+    let bins_of = |r: &PrimRef| {
+        let x = f32x4::from([r.lo[axis], -r.neg_hi[axis], 0.0, 0.0]);
+        let k = ((x - min) * scale).fast_max(f32x4::ZERO).fast_min(last_bin);
+        let [first, last, ..] = k.fast_trunc_int().to_array();
+        (first as usize % SPATIAL_BINS, last as usize % SPATIAL_BINS)
+    };
+    let mut bins = [SpatialBin {
+        bounds: Box4::EMPTY,
+        enter: 0,
+        exit: 0,
+    }; SPATIAL_BINS];
+    for r in refs {
+        let tri = &positions[r.index() as usize];
+        let (first, last) = bins_of(r);
+        bins[first].enter += 1;
+        bins[last].exit += 1;
+        let mut rest = r.box4();
+        for (k, bin) in (first + 1..).zip(&mut bins[first..last]) {
+            let (l, r) = clip::<false>(tri, &rest, axis, plane(k));
+            bin.bounds = bin.bounds.union(l);
+            rest = r;
+        }
+        bins[last].bounds = bins[last].bounds.union(rest);
+    }
+    // Right sides first (the plane before bin k), then the sweep from the left.
+    let mut right = [(Box4::EMPTY, 0u32); SPATIAL_BINS];
+    let mut acc = (Box4::EMPTY, 0);
+    for k in (1..SPATIAL_BINS).rev() {
+        acc = (acc.0.union(bins[k].bounds), acc.1 + bins[k].exit);
+        right[k] = acc;
+    }
+    let mut best: Option<(f32, SpatialPlane)> = None;
+    let mut left = (Box4::EMPTY, 0u32);
+    for k in 1..SPATIAL_BINS {
+        left = (left.0.union(bins[k - 1].bounds), left.1 + bins[k - 1].enter);
+        let r = right[k];
+        if left.1 == 0 || r.1 == 0 || (left.1 + r.1) as usize > refs.len() + budget {
+            continue;
+        }
+        let cost = left.0.surface_area() * blocks(left.1) + r.0.surface_area() * blocks(r.1);
+        if cost < best.as_ref().map_or(object_cost, |b| b.0) {
+            let p = SpatialPlane {
+                axis,
+                pos: plane(k),
+                left,
+                right: r,
+            };
+            best = Some((cost, p));
+        }
+    }
+    best.map(|b| b.1)
+}
 
-    /// The references of both sides of `plane` and their bounds: a straddling triangle
-    /// goes to one side whole where that costs less than cutting it (the paper's
-    /// reference unsplitting), else its part on each side goes there. None when a side
-    /// would be empty or as large as the node.
-    fn cut(&self, refs: &[PrimRef], plane: &SpatialPlane) -> Option<Sides> {
-        let (axis, pos) = (plane.axis, plane.pos);
-        let ((lbox, ln), (rbox, rn)) = (plane.left, plane.right);
-        let (al, ar) = (lbox.surface_area(), rbox.surface_area());
-        let (nl, nr) = (ln as f32, rn as f32);
-        let cut_cost = al * nl + ar * nr;
-        let (mut left, mut right) = (Vec::new(), Vec::new());
-        for r in refs {
-            let b = r.box4();
-            if b.max[axis] <= pos {
-                left.push(*r);
-            } else if b.min[axis] >= pos {
-                right.push(*r);
-            } else if lbox.union(b).surface_area() * nl + ar * (nr - 1.0) < cut_cost {
-                left.push(*r);
-            } else if al * (nl - 1.0) + rbox.union(b).surface_area() * nr < cut_cost {
-                right.push(*r);
-            } else {
-                let tri = &self.positions[r.index() as usize];
-                let (l, rr) = clip::<true>(tri, &b, axis, pos);
-                let index = r.index() as usize;
-                match (l.aabb().is_empty(), rr.aabb().is_empty()) {
-                    (false, false) => {
-                        left.push(PrimRef::new(index, &l.aabb()));
-                        right.push(PrimRef::new(index, &rr.aabb()));
-                    }
-                    (false, true) => left.push(PrimRef::new(index, &l.aabb())),
-                    (true, false) => right.push(PrimRef::new(index, &rr.aabb())),
-                    // Rounding left no part on either side: the box stays whole.
-                    (true, true) => left.push(*r),
+/// The references of both sides of `plane` and their bounds: a straddling triangle
+/// goes to one side whole where that costs less than cutting it (the paper's
+/// reference unsplitting), else its part on each side goes there. None when a side
+/// would be empty or as large as the node.
+#[multiversion(targets("x86_64+avx2+fma", "x86_64+sse4.2"))]
+fn cut(positions: &[[Vec3; 3]], refs: &[PrimRef], plane: &SpatialPlane) -> Option<Sides> {
+    let (axis, pos) = (plane.axis, plane.pos);
+    let ((lbox, ln), (rbox, rn)) = (plane.left, plane.right);
+    let (al, ar) = (lbox.surface_area(), rbox.surface_area());
+    let (nl, nr) = (ln as f32, rn as f32);
+    let cut_cost = al * nl + ar * nr;
+    // The bins' counts bound each side (rounding at the plane may add one): no
+    // reallocation while pushing, where growing by doubling copied each side's
+    // references about once more (Sponza, one thread: 145.9M -> 135.8M instructions
+    // per build).
+    let (mut left, mut right) = (
+        Vec::with_capacity(ln as usize + 1),
+        Vec::with_capacity(rn as usize + 1),
+    );
+    for r in refs {
+        let b = r.box4();
+        if b.max[axis] <= pos {
+            left.push(*r);
+        } else if b.min[axis] >= pos {
+            right.push(*r);
+        } else if lbox.union(b).surface_area() * nl + ar * (nr - 1.0) < cut_cost {
+            left.push(*r);
+        } else if al * (nl - 1.0) + rbox.union(b).surface_area() * nr < cut_cost {
+            right.push(*r);
+        } else {
+            let tri = &positions[r.index() as usize];
+            let (l, rr) = clip::<true>(tri, &b, axis, pos);
+            let index = r.index() as usize;
+            match (l.aabb().is_empty(), rr.aabb().is_empty()) {
+                (false, false) => {
+                    left.push(PrimRef::new(index, &l.aabb()));
+                    right.push(PrimRef::new(index, &rr.aabb()));
                 }
+                (false, true) => left.push(PrimRef::new(index, &l.aabb())),
+                (true, false) => right.push(PrimRef::new(index, &rr.aabb())),
+                // Rounding left no part on either side: the box stays whole.
+                (true, true) => left.push(*r),
             }
         }
-        let n = refs.len();
-        if left.is_empty() || right.is_empty() || left.len() >= n || right.len() >= n {
-            return None;
-        }
-        let (lb, rb) = (NodeBounds::of(&left), NodeBounds::of(&right));
-        Some((left, right, lb, rb))
     }
+    let n = refs.len();
+    if left.is_empty() || right.is_empty() || left.len() >= n || right.len() >= n {
+        return None;
+    }
+    let (lb, rb) = (NodeBounds::of(&left), NodeBounds::of(&right));
+    Some((left, right, lb, rb))
 }
 
 /// The boxes of the parts of triangle `tri` within `bounds` on either side of the plane
