@@ -226,18 +226,12 @@ impl NodeBounds {
     };
 
     fn of(refs: &[PrimRef]) -> NodeBounds {
-        let fold = |mut acc: NodeBounds, r: &PrimRef| {
-            acc.node.grow(r.lo, r.hi());
-            let c = r.centroid();
-            acc.centroids.grow(c, c);
-            acc
-        };
         if refs.len() >= 2 * PARALLEL_BIN_CHUNK {
             refs.par_chunks(PARALLEL_BIN_CHUNK)
-                .map(|c| c.iter().fold(NodeBounds::EMPTY, fold))
+                .map(bounds_of)
                 .reduce(|| NodeBounds::EMPTY, NodeBounds::union)
         } else {
-            refs.iter().fold(NodeBounds::EMPTY, fold)
+            bounds_of(refs)
         }
     }
 
@@ -246,6 +240,28 @@ impl NodeBounds {
             node: self.node.union(o.node),
             centroids: self.centroids.union(o.centroids),
         }
+    }
+}
+
+/// [`NodeBounds::of`] one chunk, for the best instruction set the CPU has (as the
+/// binning: a plain function or closure is compiled for the baseline one).
+#[multiversion(targets("x86_64+avx2+fma", "x86_64+sse4.2"))]
+fn bounds_of(refs: &[PrimRef]) -> NodeBounds {
+    let mut acc = NodeBounds::EMPTY;
+    for r in refs {
+        acc.node.grow(r.lo, r.hi());
+        let c = r.centroid();
+        acc.centroids.grow(c, c);
+    }
+    acc
+}
+
+/// Writes the `PrimRef` of each box of `bounds` to `refs`, the first with index `first`,
+/// for the best instruction set the CPU has.
+#[multiversion(targets("x86_64+avx2+fma", "x86_64+sse4.2"))]
+fn make_refs(refs: &mut [PrimRef], bounds: &[Aabb], first: usize) {
+    for (i, (r, b)) in refs.iter_mut().zip(bounds).enumerate() {
+        *r = PrimRef::new(first + i, b);
     }
 }
 
@@ -287,11 +303,14 @@ pub(super) fn build_backed(bounds: &[Aabb], split: SplitMethod, backing: Backing
         return Bvh::default();
     }
     let mut refs = HugeVec::<PrimRef>::zeroed(bounds.len(), backing);
-    let make = |(i, (r, b)): (usize, (&mut PrimRef, &Aabb))| *r = PrimRef::new(i, b);
     if bounds.len() >= 2 * PARALLEL_BIN_CHUNK {
-        refs.par_iter_mut().zip(bounds).enumerate().for_each(make);
+        let chunks = refs.par_chunks_mut(PARALLEL_BIN_CHUNK);
+        chunks
+            .zip(bounds.par_chunks(PARALLEL_BIN_CHUNK))
+            .enumerate()
+            .for_each(|(k, (r, b))| make_refs(r, b, k * PARALLEL_BIN_CHUNK));
     } else {
-        refs.iter_mut().zip(bounds).enumerate().for_each(make);
+        make_refs(&mut refs, bounds, 0);
     }
     let root = NodeBounds::of(&refs);
     let nodes = if refs.len() < PARALLEL_MIN || rayon::current_num_threads() == 1 {

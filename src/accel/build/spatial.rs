@@ -15,7 +15,7 @@
 //! place and in parallel. Every step is deterministic and the parallel tasks' pieces
 //! are joined in order, so the tree is the same whatever the thread count.
 
-use glam::Vec3;
+use glam::{BVec3A, Vec3, Vec3A};
 use multiversion::multiversion;
 use wide::f32x4;
 
@@ -130,12 +130,10 @@ struct Out {
 /// The binned-SAH tree over the triangles `positions` with spatial splits (see the
 /// module's comment); the object-only build where a coordinate is not finite.
 pub(super) fn build(positions: &[[Vec3; 3]], method: SplitMethod) -> Bvh {
-    let bounds: Vec<Aabb> = positions.iter().map(|t| Aabb::from_points(t)).collect();
-    let finite = positions.iter().flatten().all(|v| v.is_finite());
+    let (bounds, finite, root) = triangle_bounds(positions);
     // Without long triangles at the root, the object build, whole: the top of this one
     // runs on one thread, and on the tori, which take no spatial split worth it, it
     // built 100k triangles in 51.7 ms on 2 threads against 19.3 (1M: 446 against 214).
-    let root = bounds.iter().fold(Aabb::EMPTY, |a, &b| a.union(b));
     let lengths = |axis: usize| bounds.iter().map(move |b| b.max[axis] - b.min[axis]);
     if positions.is_empty()
         || method != SplitMethod::SahBinned
@@ -167,6 +165,32 @@ pub(super) fn build(positions: &[[Vec3; 3]], method: SplitMethod) -> Bvh {
         nodes: assemble(pieces.collect(), part.count, Backing::Auto),
         prim_indices: HugeVec::from(part.prims.concat()),
     }
+}
+
+/// The box of each triangle of `positions`, whether all their coordinates are finite,
+/// and the union of the boxes: one pass, for the best instruction set the CPU has.
+#[multiversion(targets("x86_64+avx2+fma", "x86_64+sse4.2"))]
+fn triangle_bounds(positions: &[[Vec3; 3]]) -> (Vec<Aabb>, bool, Aabb) {
+    // In SIMD lanes: `Vec3A::min` is `minps`, `a < b ? a : b` per lane, as `Vec3::min`
+    // and so `Aabb::from_points` and `union` compute it, bit for bit.
+    let mut finite = BVec3A::TRUE;
+    let (mut lo, mut hi) = (Vec3A::INFINITY, Vec3A::NEG_INFINITY);
+    let mut bounds = Vec::with_capacity(positions.len());
+    for t in positions {
+        let [a, b, c] = t.map(Vec3A::from);
+        finite &= a.is_finite_mask() & b.is_finite_mask() & c.is_finite_mask();
+        let (min, max) = (a.min(b).min(c), a.max(b).max(c));
+        (lo, hi) = (lo.min(min), hi.max(max));
+        bounds.push(Aabb {
+            min: min.into(),
+            max: max.into(),
+        });
+    }
+    let root = Aabb {
+        min: lo.into(),
+        max: hi.into(),
+    };
+    (bounds, finite.all(), root)
 }
 
 impl Builder<'_> {
