@@ -33,14 +33,14 @@ fn main() {
         .expect("a thread pool");
     let tris = if std::env::args().nth(1).as_deref() == Some("sponza") {
         let Some(assets) = assets_dir() else {
-            println!("skipping sponza: ../shared/assets is absent");
+            glint_bench::outln!("skipping sponza: ../shared/assets is absent");
             return;
         };
         match find_file(&assets.join("classic/sponza-dabrovic"), "obj").and_then(|p| load_model(&p))
         {
             Ok(tris) => tris,
             Err(e) => {
-                println!("skipping sponza: {e}");
+                glint_bench::outln!("skipping sponza: {e}");
                 return;
             }
         }
@@ -61,7 +61,7 @@ fn main() {
     let (ms, faults) = time_rounds(rounds, || {
         in_pool(&mut || bvh = Bvh::build_triangles(&tris, SplitMethod::SahBinned))
     });
-    println!(
+    glint_bench::outln!(
         "{} triangles, {threads} threads: build {ms}, {faults} page faults, {} nodes, {} leaves, SAH cost {:.3} ({:.3} counting leaves in groups of {LANES}), hash {:016x}",
         tris.len(),
         bvh.nodes.len(),
@@ -74,7 +74,7 @@ fn main() {
     let (ms, faults) = time_rounds(rounds, || {
         in_pool(&mut || wide = WideBvh::collapse(&bvh, &tris))
     });
-    println!(
+    glint_bench::outln!(
         "collapse {ms}, {faults} page faults, {} wide nodes, {:.1} bytes/tri, hash {:016x}",
         wide.nodes.len(),
         wide.bytes() as f64 / tris.len() as f64,
@@ -90,7 +90,7 @@ fn main() {
         drop(pipeline());
         thread_cpu_ns() - start
     });
-    println!(
+    glint_bench::outln!(
         "build + collapse: on a worker {worker}, {worker_faults} page faults; from the main thread {main}, {main_faults} page faults"
     );
 }

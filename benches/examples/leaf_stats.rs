@@ -35,7 +35,7 @@ fn stats(label: &str, tris: &[[glam::Vec3; 3]]) {
     let groups = wide.leaves.groups.len();
     let pad = groups * LANES - tris.len();
     let per = |b: usize| b as f64 / tris.len() as f64;
-    println!(
+    glint_bench::outln!(
         "{label}: {} tris, {:.2} B/tri (nodes {:.2}, leaves {:.2}), {} nodes depth {}, groups {groups}, padding lanes {pad} ({:.1}%), lanes: leaf {leaf_lanes} inner {inner_lanes} empty {empty}",
         tris.len(),
         per(wide.bytes()),
@@ -45,8 +45,8 @@ fn stats(label: &str, tris: &[[glam::Vec3; 3]]) {
         wide.depth,
         100.0 * pad as f64 / (groups * LANES) as f64,
     );
-    println!("  binary leaf sizes: {:?}", &bin[1..]);
-    println!("  wide leaf sizes:   {:?}", &lanes[1..]);
+    glint_bench::outln!("  binary leaf sizes: {:?}", &bin[1..]);
+    glint_bench::outln!("  wide leaf sizes:   {:?}", &lanes[1..]);
 }
 
 fn main() {
@@ -67,7 +67,7 @@ fn main() {
         ] {
             match find_file(&a.join(dir), ext).and_then(|p| load_model(&p)) {
                 Ok(t) => stats(label, &t),
-                Err(e) => println!("{label}: {e}"),
+                Err(e) => glint_bench::outln!("{label}: {e}"),
             }
         }
     }

@@ -68,7 +68,7 @@ fn main() {
     let n_rays = arg(2, 1 << 16);
     let (tris, view) = if std::env::args().nth(1).as_deref() == Some("sponza") {
         let Some(assets) = assets_dir() else {
-            println!("skipping sponza: ../shared/assets is absent");
+            glint_bench::outln!("skipping sponza: ../shared/assets is absent");
             return;
         };
         match find_file(&assets.join("classic/sponza-dabrovic"), "obj").and_then(|p| load_model(&p))
@@ -78,11 +78,11 @@ fn main() {
                 (tris, view)
             }
             Ok(_) => {
-                println!("skipping sponza: no triangles");
+                glint_bench::outln!("skipping sponza: no triangles");
                 return;
             }
             Err(e) => {
-                println!("skipping sponza: {e}");
+                glint_bench::outln!("skipping sponza: {e}");
                 return;
             }
         }
@@ -98,7 +98,7 @@ fn main() {
     ];
     for (name, rays) in &sets {
         let hits = black_box(trace_rays(&wide, rays, *name == "shadow"));
-        println!("{name} {} rays {hits} hits", rays.len());
+        glint_bench::outln!("{name} {} rays {hits} hits", rays.len());
     }
     // With GLINT_RAYS_REPEAT=k: k rounds of the three sets, each round tracing each set
     // once, and each set's least and median time on the CPU, for A/B runs of builds of
@@ -119,14 +119,14 @@ fn main() {
         }
         for (k, (name, _)) in sets.iter().enumerate() {
             ms[k].sort_by(f64::total_cmp);
-            println!(
+            glint_bench::outln!(
                 "time {name}: least {:.2} ms median {:.2} ms",
                 ms[k][0],
                 ms[k][ms[k].len() / 2]
             );
         }
     }
-    println!(
+    glint_bench::outln!(
         "{} triangles, {:.1} bytes/tri, SAH cost {sah_cost:.3}",
         tris.len(),
         wide.bytes() as f64 / tris.len() as f64

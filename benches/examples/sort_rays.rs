@@ -93,7 +93,7 @@ fn main() {
             v.sort_by(f64::total_cmp);
             v[v.len() / 2]
         };
-        println!(
+        glint_bench::outln!(
             "{} tris {name}: as generated {:.1} ms, sort {:.1} ms, sorted {:.1} ms ({} rays)",
             tris.len(),
             med(&mut a),
