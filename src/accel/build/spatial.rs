@@ -15,7 +15,7 @@
 //! place and in parallel. Every step is deterministic and the parallel tasks' pieces
 //! are joined in order, so the tree is the same whatever the thread count.
 
-use glam::{BVec3A, Vec3, Vec3A};
+use glam::Vec3;
 use multiversion::multiversion;
 use wide::f32x4;
 
@@ -171,26 +171,35 @@ pub(super) fn build(positions: &[[Vec3; 3]], method: SplitMethod) -> Bvh {
 /// and the union of the boxes: one pass, for the best instruction set the CPU has.
 #[multiversion(targets("x86_64+avx2+fma", "x86_64+sse4.2"))]
 fn triangle_bounds(positions: &[[Vec3; 3]]) -> (Vec<Aabb>, bool, Aabb) {
-    // In SIMD lanes: `Vec3A::min` is `minps`, `a < b ? a : b` per lane, as `Vec3::min`
-    // and so `Aabb::from_points` and `union` compute it, bit for bit.
-    let mut finite = BVec3A::TRUE;
-    let (mut lo, mut hi) = (Vec3A::INFINITY, Vec3A::NEG_INFINITY);
+    // Lane by lane `a < b ? a : b` (and `a > b ? a : b`), what `Vec3::min` and `max`
+    // compute, so each box is `Aabb::from_points`' and the root their `union`, bit for
+    // bit; on x86 each is one `minps` / `maxps`, which computes just that. (Not glam's
+    // `Vec3A::min`: on aarch64 it is NEON's, which differs for NaN and signed zeros.)
+    let min = |a: [f32; 4], b: [f32; 4]| -> [f32; 4] {
+        std::array::from_fn(|i| if a[i] < b[i] { a[i] } else { b[i] })
+    };
+    let max = |a: [f32; 4], b: [f32; 4]| -> [f32; 4] {
+        std::array::from_fn(|i| if a[i] > b[i] { a[i] } else { b[i] })
+    };
+    let finite_lanes = |v: [f32; 4]| v.iter().fold(true, |ok, x| ok & x.is_finite());
+    let vec3 = |v: [f32; 4]| Vec3::new(v[0], v[1], v[2]);
+    let (mut finite, mut lo, mut hi) = (true, [f32::INFINITY; 4], [f32::NEG_INFINITY; 4]);
     let mut bounds = Vec::with_capacity(positions.len());
     for t in positions {
-        let [a, b, c] = t.map(Vec3A::from);
-        finite &= a.is_finite_mask() & b.is_finite_mask() & c.is_finite_mask();
-        let (min, max) = (a.min(b).min(c), a.max(b).max(c));
-        (lo, hi) = (lo.min(min), hi.max(max));
+        let [a, b, c] = t.map(|v| [v.x, v.y, v.z, 0.0]);
+        finite &= finite_lanes(a) & finite_lanes(b) & finite_lanes(c);
+        let (tmin, tmax) = (min(min(a, b), c), max(max(a, b), c));
+        (lo, hi) = (min(lo, tmin), max(hi, tmax));
         bounds.push(Aabb {
-            min: min.into(),
-            max: max.into(),
+            min: vec3(tmin),
+            max: vec3(tmax),
         });
     }
     let root = Aabb {
-        min: lo.into(),
-        max: hi.into(),
+        min: vec3(lo),
+        max: vec3(hi),
     };
-    (bounds, finite.all(), root)
+    (bounds, finite, root)
 }
 
 impl Builder<'_> {

@@ -208,3 +208,52 @@ fn the_tree_is_the_same_on_one_thread_and_on_four() {
     assert_eq!(one.prim_indices, many.prim_indices);
     WideBvh::collapse(&one, &tris).validate(&tris).unwrap();
 }
+
+/// `triangle_bounds` is `Aabb::from_points` per triangle, their `union` and the
+/// finiteness of every coordinate, bit for bit, on coordinates with signed zeros, NaN
+/// and infinities (whose order decides `min` and `max`).
+#[test]
+fn triangle_bounds_match_the_scalar_boxes_bit_for_bit() {
+    let mut rng = Lcg(41);
+    let special = [
+        0.0,
+        -0.0,
+        1.0,
+        -1.0,
+        f32::NAN,
+        f32::INFINITY,
+        f32::NEG_INFINITY,
+    ];
+    let coordinate = |rng: &mut Lcg| {
+        let k = (rng.next_f32() * 10.0) as usize;
+        special
+            .get(k)
+            .copied()
+            .unwrap_or_else(|| rng.next_f32() * 4.0 - 2.0)
+    };
+    for n in [1, 2, 7, 100] {
+        let tris: Vec<Tri> = (0..n)
+            .map(|_| {
+                [0; 3].map(|_| {
+                    Vec3::new(
+                        coordinate(&mut rng),
+                        coordinate(&mut rng),
+                        coordinate(&mut rng),
+                    )
+                })
+            })
+            .collect();
+        let (bounds, finite, root) = triangle_bounds(&tris);
+        let bits = |b: &Aabb| [b.min.to_array(), b.max.to_array()].map(|v| v.map(f32::to_bits));
+        let mut want_root = Aabb::EMPTY;
+        for (t, b) in tris.iter().zip(&bounds) {
+            let want = Aabb::from_points(t);
+            assert_eq!(bits(b), bits(&want), "{t:?}");
+            want_root = want_root.union(want);
+        }
+        assert_eq!(bits(&root), bits(&want_root));
+        assert_eq!(finite, tris.iter().flatten().all(|v| v.is_finite()));
+    }
+    // All finite: the flag is set.
+    assert!(triangle_bounds(&slivers(8, 3)).1);
+}
