@@ -20,6 +20,7 @@ pub mod scene;
 pub mod schedule;
 pub mod shade;
 pub mod stats;
+pub mod terminal;
 pub mod test_util;
 pub mod trace;
 

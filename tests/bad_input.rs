@@ -272,6 +272,29 @@ fn a_closed_stdout_pipe_ends_the_cli_quietly() {
     assert!(!stderr.contains("panicked"), "{stderr}");
 }
 
+/// A full disk under standard output is a failure, not a closed reader: status 1 and a
+/// line saying so (Linux's `/dev/full` fails every write with "no space left").
+#[test]
+fn a_full_stdout_is_an_error() {
+    let Ok(full) = std::fs::File::create("/dev/full") else {
+        println!("skipping: no /dev/full here");
+        return;
+    };
+    let dir = scene_dir(GOOD);
+    let out = Command::new(env!("CARGO_BIN_EXE_glint"))
+        .current_dir(dir.path())
+        .args(["info", "scene.ron"])
+        .stdout(full)
+        .output()
+        .unwrap();
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert_eq!(out.status.code(), Some(1), "{stderr}");
+    assert!(
+        stderr.starts_with("error: cannot write to standard output"),
+        "{stderr}"
+    );
+}
+
 /// Standard error carries only diagnostics: with its reader gone, a render still writes
 /// its image and `stress` its table, where `eprintln!` panicked (status 101) before.
 #[test]

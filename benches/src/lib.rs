@@ -268,8 +268,9 @@ pub fn load_instanced(path: &Path) -> Result<(Vec<[Vec3; 3]>, usize, TwoLevelBvh
     Ok((tris, flattened, two))
 }
 
-/// `println!` for the examples: a reader that has gone away (`| head -1`) ends the
-/// process quietly instead of the panic `println!` raises on a closed pipe.
+/// `println!` for the examples through [`glint::terminal::print_stdout`]: a reader that
+/// has gone away (`| head -1`) ends the process quietly instead of the panic `println!`
+/// raises on a closed pipe.
 #[macro_export]
 macro_rules! outln {
     ($($arg:tt)*) => {
@@ -279,14 +280,7 @@ macro_rules! outln {
 
 /// Writes `text` and a newline to standard output (see [`outln!`]).
 pub fn print_line(text: &str) {
-    use std::io::Write;
-    let mut out = std::io::stdout().lock();
-    if let Err(e) = writeln!(out, "{text}").and_then(|()| out.flush()) {
-        if e.kind() == std::io::ErrorKind::BrokenPipe {
-            std::process::exit(0);
-        }
-        panic!("cannot write to standard output: {e}");
-    }
+    glint::terminal::print_stdout(&format!("{text}\n"));
 }
 
 /// `../shared/assets` next to the checkout, if present.

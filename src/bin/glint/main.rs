@@ -118,19 +118,7 @@ fn info(args: &cli::SceneArgs) -> CliResult<()> {
     Ok(())
 }
 
-/// Writes `text` to standard output. A reader that has gone away (`glint info | head -1`)
-/// ends the program quietly, as it does for other command-line tools, instead of the
-/// panic `print!` raises on a closed pipe.
-pub fn print_stdout(text: &str) {
-    let mut out = std::io::stdout().lock();
-    if let Err(e) = out.write_all(text.as_bytes()).and_then(|()| out.flush()) {
-        if e.kind() == std::io::ErrorKind::BrokenPipe {
-            std::process::exit(0);
-        }
-        print_stderr(&format!("error: cannot write to standard output: {e}"));
-        std::process::exit(1);
-    }
-}
+pub use glint::terminal::print_stdout;
 
 /// Writes `text` and a newline to standard error (progress, warnings, summaries). These
 /// are diagnostics: if their reader has gone away (`glint render 2>&1 | head -1`) the
