@@ -22,7 +22,7 @@ use wide::f32x4;
 use super::bins::Bins;
 use super::{
     Box4, NodeBounds, PARALLEL_MIN, Piece, PrimRef, assemble, blocks, build_node, build_subtree,
-    split,
+    make_refs, split,
 };
 use crate::accel::Aabb;
 use crate::accel::bvh::{Bvh, BvhNode, SplitMethod};
@@ -142,11 +142,8 @@ pub(super) fn build(positions: &[[Vec3; 3]], method: SplitMethod) -> Bvh {
     {
         return super::build(&bounds, method);
     }
-    let refs: Vec<PrimRef> = bounds
-        .iter()
-        .enumerate()
-        .map(|(i, b)| PrimRef::new(i, b))
-        .collect();
+    let mut refs: Vec<PrimRef> = bytemuck::zeroed_vec(bounds.len());
+    make_refs(&mut refs, &bounds, 0);
     let root = NodeBounds::of(&refs);
     let b = Builder {
         method,
