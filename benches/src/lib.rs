@@ -367,10 +367,21 @@ pub fn cornell_scene() -> PathBuf {
 /// ~4 ms; 0 elsewhere).
 pub fn thread_cpu_ns() -> u64 {
     #[cfg(target_os = "linux")]
-    {
-        let t = rustix::time::clock_gettime(rustix::time::ClockId::ThreadCPUTime);
-        t.tv_sec as u64 * 1_000_000_000 + t.tv_nsec as u64
-    }
+    return clock_ns(rustix::time::ClockId::ThreadCPUTime);
     #[cfg(not(target_os = "linux"))]
     0
+}
+
+/// Nanoseconds all the process's threads have run on a CPU (as [`thread_cpu_ns`]).
+pub fn process_cpu_ns() -> u64 {
+    #[cfg(target_os = "linux")]
+    return clock_ns(rustix::time::ClockId::ProcessCPUTime);
+    #[cfg(not(target_os = "linux"))]
+    0
+}
+
+#[cfg(target_os = "linux")]
+fn clock_ns(id: rustix::time::ClockId) -> u64 {
+    let t = rustix::time::clock_gettime(id);
+    t.tv_sec as u64 * 1_000_000_000 + t.tv_nsec as u64
 }
