@@ -32,6 +32,7 @@ import argparse
 import math
 import os
 import re
+import resource
 import statistics
 import subprocess
 import sys
@@ -167,11 +168,19 @@ def time_glint(binary, size, spp, threads, out):
     cmd = [binary, "render", SCENE, "--width", str(size), "--height", str(size), "--threads", str(threads), "-o", out]
     for s in GLINT_SET + [f"pixel_samples={spp}"]:
         cmd += ["--set", s]
+    cpu, wall = children_cpu(), time.perf_counter()
     p = subprocess.run(cmd, capture_output=True, text=True, check=True)
+    busy = (children_cpu() - cpu) / (time.perf_counter() - wall)
     m = re.search(r"spp, ([0-9.]+) s \(", p.stdout + p.stderr)
     if not m:
         sys.exit(f"cannot read glint's summary: {p.stdout}{p.stderr}")
-    return float(m.group(1))
+    return float(m.group(1)), busy
+
+
+def children_cpu():
+    """CPU seconds of the finished child processes (glint's runs)."""
+    r = resource.getrusage(resource.RUSAGE_CHILDREN)
+    return r.ru_utime + r.ru_stime
 
 
 def main():
@@ -213,21 +222,27 @@ def main():
     # Interleaved rounds: every runner once per round, in rotating order.
     runners = [("glint", n) for n in threads] + [(v, n) for v in variants for n in threads]
     times = {r: [] for r in runners}
+    # CPU time over wall time per render: the threads that worked, about n for n
+    # threads (glint's counts its whole process, scene loading included).
+    busy = {r: [] for r in runners}
     glint_exr = os.path.join(RESULTS, "glint_cornell.exr")
     for rnd in range(args.rounds):
         for k in range(len(runners)):
             who, n = runners[(rnd + k) % len(runners)]
             if who == "glint":
-                times[(who, n)].append(time_glint(args.glint, args.size, args.spp, n, glint_exr))
+                t, b = time_glint(args.glint, args.size, args.spp, n, glint_exr)
+                times[(who, n)].append(t)
+                busy[(who, n)].append(b)
                 continue
             mi.set_variant(who)
             dr.set_thread_count(n)
-            t = time.perf_counter()
+            cpu, t = time.process_time(), time.perf_counter()
             # One seed: a new literal seed would make the LLVM variant compile anew.
             img = mi.render(scenes[who], spp=args.spp, seed=0)
             dr.eval(img)
             dr.sync_thread()
             times[(who, n)].append(time.perf_counter() - t)
+            busy[(who, n)].append((time.process_time() - cpu) / times[(who, n)][-1])
 
     lines = [
         f"{os.path.basename(SCENE)} {args.size}x{args.size}, {args.spp} spp, direct light only, "
@@ -238,7 +253,10 @@ def main():
         if who != "glint" and n == 1:
             extra = f" (first warm-up render: {warmup[who]:.3f} s)" if who.startswith("llvm") else ""
         label = "glint (binary, whole run)" if who == "glint" else f"mitsuba {who}"
-        lines.append(f"{label:27} {n} thread{'s' if n > 1 else ' '}: {fmt(times[(who, n)])}{extra}")
+        b = median_range(busy[(who, n)])[0]
+        lines.append(
+            f"{label:27} {n} thread{'s' if n > 1 else ' '}: {fmt(times[(who, n)])}, {b:.2f} threads busy{extra}"
+        )
     # Ratios within a round cancel most of the load other processes put on a
     # shared machine; the times alone do not.
     for v in variants:

@@ -18,8 +18,8 @@
 //! names its library (see `glint_bench::embree`; `GLINT_EMBREE_CONFIG` adds device
 //! settings, e.g. `hugepages=1`). Every peer calls its
 //! library once per ray. Build times are for one thread and for the global
-//! rayon pool (glint) or Embree's default thread count (Embree); obvhs and
-//! tinybvh build on one thread here.
+//! rayon pool (glint) or Embree's default thread count (Embree's, timed after every
+//! mesh: see `main`); obvhs and tinybvh build on one thread here.
 //!
 //! `GLINT_BENCH_ROUNDS` sets the number of rounds (default 7), and
 //! `GLINT_BENCH_RAYS` the rays per set (default 262144).
@@ -202,15 +202,15 @@ fn time_ms(rounds: usize, mut f: impl FnMut()) -> (f64, f64, f64) {
     (m, v[0], v[v.len() - 1])
 }
 
-/// `embree`: a one-thread device and the configuration of one with Embree's default
-/// threads, made for its build row alone (see `main`); `two_level`:
+/// `embree`: a one-thread device (Embree's builds on all threads are timed after every
+/// mesh's rows, see `main`); `two_level`:
 /// how many of `tris` the render keeps flattened (the first ones) and its two-level
 /// BVH over the rest, if some meshes are instanced.
 fn bench_mesh(
     label: &str,
     tris: &[[Vec3; 3]],
     view: &View,
-    embree: Option<(&Embree, &str)>,
+    embree: Option<&Embree>,
     two_level: Option<(usize, &TwoLevelBvh)>,
 ) {
     let rounds = env_usize("GLINT_BENCH_ROUNDS", 7).max(1);
@@ -280,20 +280,14 @@ fn bench_mesh(
         }
         Err(e) => println!("  skipping tinybvh: {e}"),
     }
-    if let Some((e1, all_threads)) = embree {
+    if let Some(e1) = embree {
         let (t1, busy) = busy_threads(|| {
             time_ms(build_rounds, || {
                 black_box(e1.scene(tris).unwrap());
             })
         });
-        let tn = Embree::load(all_threads).map(|en| {
-            time_ms(build_rounds, || {
-                black_box(en.scene(tris).unwrap());
-            })
-        });
-        let tn = tn.map_or_else(|e| format!("skipped: {e}"), ms);
         println!(
-            "  embree medium  {} | {tn} ({busy:.2} threads busy on one)",
+            "  embree medium  {} | at the end ({busy:.2} threads busy on one)",
             ms(t1)
         );
     }
@@ -308,7 +302,7 @@ fn bench_mesh(
         &mut Duration::default(),
     );
     let embree_before = Embree::bytes_in_use();
-    let escene = embree.map(|(e, _)| e.scene(tris).unwrap());
+    let escene = embree.map(|e| e.scene(tris).unwrap());
     let embree_bytes = Embree::bytes_in_use().saturating_sub(embree_before);
     println!(
         "memory, bytes/tri (positions alone {:.1}): glint 8-wide {:.1} \
@@ -438,9 +432,10 @@ fn main() {
     // (`getMaxNumThreads` over all devices), so a one-thread device's build runs on
     // every core while a default device lives: until December 2026 this bench kept both
     // for the whole run, and its "1 thread" Embree builds took two threads here (1.9
-    // threads busy, half the time of a build alone on its one). So the default device
-    // lives only while its own builds are timed.
-    let all_threads = config("");
+    // threads busy, half the time of a build alone on its one). Nor can the default
+    // device live only while its own builds are timed: once it is released, a TBB
+    // worker spins in `sched_yield` for the rest of the run (a core busy beside every
+    // row after it). So it is made once, after every mesh's one-thread rows.
     let embree = match Embree::load(&config("threads=1")) {
         Ok(e) => Some(e),
         Err(e) => {
@@ -448,37 +443,30 @@ fn main() {
             None
         }
     };
-    let embree = embree.as_ref().map(|e1| (e1, all_threads.as_str()));
+    let embree = embree.as_ref();
+    // Each mesh benched, for Embree's builds on all threads at the end.
+    let mut benched: Vec<(&str, Vec<[Vec3; 3]>)> = Vec::new();
     if wanted("torus100k") {
-        bench_mesh(
-            "torus100k",
-            &displaced_torus(158),
-            &View::torus(),
-            embree,
-            None,
-        );
+        let tris = displaced_torus(158);
+        bench_mesh("torus100k", &tris, &View::torus(), embree, None);
+        benched.push(("torus100k", tris));
     }
     if wanted("torus1M") {
-        bench_mesh(
-            "torus1M",
-            &displaced_torus(500),
-            &View::torus(),
-            embree,
-            None,
-        );
+        let tris = displaced_torus(500);
+        bench_mesh("torus1M", &tris, &View::torus(), embree, None);
+        benched.push(("torus1M", tris));
     }
     if wanted("cornell") {
         // The 34 triangles of the whole-render benchmark's scene, from its own camera:
         // how the peers compare where the render spends its time.
         match load_model(&cornell_scene()) {
-            Ok(tris) => bench_mesh("cornell", &tris, &View::cornell(), embree, None),
+            Ok(tris) => {
+                bench_mesh("cornell", &tris, &View::cornell(), embree, None);
+                benched.push(("cornell", tris));
+            }
             Err(e) => println!("skipping cornell: {e}"),
         }
     }
-    let Some(assets) = assets_dir() else {
-        println!("skipping the real models: ../shared/assets is absent");
-        return;
-    };
     let models = [
         ("bunny", "classic/stanford-bunny", "obj"),
         ("sponza", "classic/sponza-dabrovic", "obj"),
@@ -488,17 +476,45 @@ fn main() {
             "glb",
         ),
     ];
-    for (label, dir, ext) in models {
-        if !wanted(label) {
-            continue;
-        }
-        match find_file(&assets.join(dir), ext).and_then(|p| load_instanced(&p)) {
-            Ok((tris, once, two)) if !tris.is_empty() => {
-                let two = (!two.is_empty()).then_some((once, &two));
-                bench_mesh(label, &tris, &View::framing(&tris), embree, two)
+    match assets_dir() {
+        None => println!("skipping the real models: ../shared/assets is absent"),
+        Some(assets) => {
+            for (label, dir, ext) in models {
+                if !wanted(label) {
+                    continue;
+                }
+                match find_file(&assets.join(dir), ext).and_then(|p| load_instanced(&p)) {
+                    Ok((tris, once, two)) if !tris.is_empty() => {
+                        let two = (!two.is_empty()).then_some((once, &two));
+                        bench_mesh(label, &tris, &View::framing(&tris), embree, two);
+                        benched.push((label, tris));
+                    }
+                    Ok(_) => println!("skipping {label}: no triangles"),
+                    Err(e) => println!("skipping {label}: {e}"),
+                }
             }
-            Ok(_) => println!("skipping {label}: no triangles"),
-            Err(e) => println!("skipping {label}: {e}"),
         }
+    }
+    if embree.is_some() {
+        embree_all_threads(&config(""), &benched);
+    }
+}
+
+/// Embree's build of each of `benched` on a device with `config` (its default thread
+/// count), ms median [min-max] over 5 rounds.
+fn embree_all_threads(config: &str, benched: &[(&str, Vec<[Vec3; 3]>)]) {
+    let en = match Embree::load(config) {
+        Ok(en) => en,
+        Err(e) => return println!("skipping Embree's builds on all threads: {e}"),
+    };
+    println!(
+        "\n== embree medium on all {} threads, ms median [min-max] ==",
+        std::thread::available_parallelism().map_or(1, |n| n.get())
+    );
+    for (label, tris) in benched {
+        let (m, lo, hi) = time_ms(5, || {
+            black_box(en.scene(tris).unwrap());
+        });
+        println!("  {label:<10} {m:8.1} [{lo:.1}-{hi:.1}]");
     }
 }
