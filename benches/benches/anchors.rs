@@ -29,7 +29,7 @@ use std::time::{Duration, Instant};
 
 use glam::{Vec3, Vec3A};
 use glint::accel::{Bvh, PACKET, Ray, TwoLevelBvh, WideBvh};
-use glint_bench::embree::{Embree, EmbreeScene};
+use glint_bench::embree::{BuildQuality, Embree, EmbreeScene};
 use glint_bench::tinybvh::TinyBvh8;
 use glint_bench::{
     View, assets_dir, cornell_scene, displaced_torus, find_file, glint_binary, glint_closest,
@@ -290,6 +290,12 @@ fn bench_mesh(
             "  embree medium  {} | at the end ({busy:.2} threads busy on one)",
             ms(t1)
         );
+        // Embree's SBVH, the like of glint's spatial splits (which glint takes where
+        // long triangles make them pay: Sponza; on the tori it builds objects alone).
+        let th = time_ms(build_rounds, || {
+            black_box(e1.scene_of_quality(tris, BuildQuality::High).unwrap());
+        });
+        println!("  embree high    {} (spatial splits)", ms(th));
     }
 
     let bvh = glint_binary(tris);

@@ -29,6 +29,16 @@ const RTC_FORMAT_UINT3: u32 = 0x5003;
 const RTC_FORMAT_FLOAT3: u32 = 0x9003;
 const RTC_INVALID_GEOMETRY_ID: u32 = u32::MAX;
 
+/// `RTCBuildQuality`: how much work a scene's build puts into its BVH.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[repr(u32)]
+pub enum BuildQuality {
+    /// Embree's default: binned SAH.
+    Medium = 1,
+    /// Binned SAH with spatial splits (Embree's SBVH builder for triangles).
+    High = 2,
+}
+
 /// `RTCRay`.
 #[repr(C, align(16))]
 #[derive(Clone, Copy)]
@@ -100,6 +110,7 @@ struct Api {
     new_scene: unsafe extern "C" fn(Handle) -> Handle,
     release_scene: unsafe extern "C" fn(Handle),
     commit_scene: unsafe extern "C" fn(Handle),
+    set_scene_build_quality: unsafe extern "C" fn(Handle, u32),
     new_geometry: unsafe extern "C" fn(Handle, u32) -> Handle,
     set_new_geometry_buffer: unsafe extern "C" fn(Handle, u32, u32, u32, usize, usize) -> Handle,
     commit_geometry: unsafe extern "C" fn(Handle),
@@ -167,6 +178,7 @@ impl Embree {
             new_scene: sym!("rtcNewScene"),
             release_scene: sym!("rtcReleaseScene"),
             commit_scene: sym!("rtcCommitScene"),
+            set_scene_build_quality: sym!("rtcSetSceneBuildQuality"),
             new_geometry: sym!("rtcNewGeometry"),
             set_new_geometry_buffer: sym!("rtcSetNewGeometryBuffer"),
             commit_geometry: sym!("rtcCommitGeometry"),
@@ -200,12 +212,24 @@ impl Embree {
 
     /// Builds a scene (Embree's default, medium quality) over `tris`.
     pub fn scene(&self, tris: &[[Vec3; 3]]) -> Result<EmbreeScene<'_>, String> {
+        self.scene_of_quality(tris, BuildQuality::Medium)
+    }
+
+    /// Builds a scene of build quality `quality` over `tris`.
+    pub fn scene_of_quality(
+        &self,
+        tris: &[[Vec3; 3]],
+        quality: BuildQuality,
+    ) -> Result<EmbreeScene<'_>, String> {
         let a = &self.api;
         let n = tris.len();
         // SAFETY: Embree allocates both buffers with the sizes given here
         // (plus its own padding), and they are written within those sizes.
         unsafe {
             let scene = (a.new_scene)(self.device);
+            if !scene.is_null() {
+                (a.set_scene_build_quality)(scene, quality as u32);
+            }
             let geom = (a.new_geometry)(self.device, RTC_GEOMETRY_TYPE_TRIANGLE);
             let verts = (a.set_new_geometry_buffer)(
                 geom,
