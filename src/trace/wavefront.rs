@@ -550,25 +550,45 @@ pub fn gather_radiance(wf: Res<Wavefront>, mut radiance: ResMut<SampleRadiance>)
     }
 }
 
-/// Appends to `wf.next` the child rays of every hit for which `make` gives a ray and a
-/// weight, in queue order, as children along `branch` in the ray tree; returns how many.
+/// Appends to `wf.next` a child ray of every hit for which `weight(ray, material)` gives
+/// a weight, `ray(ray, surface)`, in queue order, as children along `branch` in the ray
+/// tree; returns how many. The weight needs only the hit's material, read from its lane:
+/// the shading point is gathered from the lanes only for the hits that spawn (a fifth
+/// of the Cornell scene's camera rays), where gathering every hit's took 4.9% of its
+/// render on one thread. (In parallel chunks appended in order, it took 1.5% more
+/// instructions per ray than this loop on one thread, which two threads did not win back.)
 fn spawn_children(
     wf: &mut Wavefront,
     branch: Branch,
-    make: impl Fn(&QueuedRay, &Surface) -> Option<(Ray, Vec3)>,
+    weight: impl Fn(&QueuedRay, u32) -> Option<Vec3>,
+    ray: impl Fn(&QueuedRay, &Surface) -> Ray,
 ) -> usize {
-    let before = wf.next.len();
-    let children = wf.rays.iter().zip(wf.hits.iter()).filter_map(|(q, hit)| {
-        let (ray, weight) = make(q, hit.as_ref()?)?;
-        Some(QueuedRay {
-            ray,
-            weight,
-            slot: q.slot,
-            path: q.child_path(branch),
-        })
-    });
-    wf.next.extend(children);
-    wf.next.len() - before
+    let Wavefront {
+        rays, hits, next, ..
+    } = wf;
+    let before = next.len();
+    // Blocks of LANES rays, lanes in order: the queue's order. No hit bit is set past
+    // the queue's end, which is the rays'.
+    debug_assert_eq!(rays.len(), hits.len());
+    for (block, rays) in hits.blocks().iter().zip(rays.chunks(LANES)) {
+        let mut lanes = block.hit;
+        while lanes != 0 {
+            let j = lanes.trailing_zeros() as usize;
+            lanes &= lanes - 1;
+            let Some(q) = rays.get(j) else { break };
+            let Some(weight) = weight(q, block.material[j]) else {
+                continue;
+            };
+            let surface = block.get(j).expect("a lane with its hit bit set");
+            next.push(QueuedRay {
+                ray: ray(q, &surface),
+                weight,
+                slot: q.slot,
+                path: q.child_path(branch),
+            });
+        }
+    }
+    next.len() - before
 }
 
 /// Queues `ks`-weighted reflection rays for the next depth.
@@ -582,11 +602,16 @@ pub fn spawn_reflection_rays(
         return;
     }
     let depth = wf.depth;
-    let spawned = spawn_children(&mut wf, Branch::Reflection, |q, surface| {
-        let m = &materials.list[surface.material as usize];
-        let weight = q.weight * blend_alpha(&settings, m.alpha, depth) * m.ks;
-        (weight != Vec3::ZERO).then(|| (surface.reflection_ray(q.ray.dir), weight))
-    });
+    let spawned = spawn_children(
+        &mut wf,
+        Branch::Reflection,
+        |q, material| {
+            let m = &materials.list[material as usize];
+            let weight = q.weight * blend_alpha(&settings, m.alpha, depth) * m.ks;
+            (weight != Vec3::ZERO).then_some(weight)
+        },
+        |q, surface| surface.reflection_ray(q.ray.dir),
+    );
     stats.record(Stage::SpawnReflectionRays, spawned as u64);
     stats.rays.reflection += spawned as u64;
 }
@@ -601,12 +626,16 @@ pub fn spawn_pass_through_rays(
     if wf.depth >= settings.max_depth {
         return;
     }
-    let spawned = spawn_children(&mut wf, Branch::PassThrough, |q, surface| {
-        let alpha = materials.list[surface.material as usize].alpha;
-        let weight = q.weight * (1.0 - alpha);
-        (alpha != 1.0 && weight != Vec3::ZERO)
-            .then(|| (surface.pass_through_ray(q.ray.dir), weight))
-    });
+    let spawned = spawn_children(
+        &mut wf,
+        Branch::PassThrough,
+        |q, material| {
+            let alpha = materials.list[material as usize].alpha;
+            let weight = q.weight * (1.0 - alpha);
+            (alpha != 1.0 && weight != Vec3::ZERO).then_some(weight)
+        },
+        |q, surface| surface.pass_through_ray(q.ray.dir),
+    );
     stats.record(Stage::SpawnPassThroughRays, spawned as u64);
     stats.rays.pass_through += spawned as u64;
 }
