@@ -64,6 +64,9 @@ enum Peer<'a> {
     GlintInstanced(&'a WideBvh, &'a TwoLevelBvh),
     Obvhs(&'a CwBvh, &'a [Triangle]),
     Embree(&'a EmbreeScene<'a>),
+    /// Embree's single rays in a scene built with `RTC_SCENE_FLAG_ROBUST`: its
+    /// conservative traversal and watertight triangle test, glint's guarantees.
+    EmbreeRobust(&'a EmbreeScene<'a>),
     /// Embree's 16-ray packets over consecutive rays of a set (what packets buy).
     Embree16(&'a EmbreeScene<'a>),
     /// The 8-wide BVH's packets of 8 consecutive rays (`WideBvh::occluded_packet`,
@@ -80,6 +83,7 @@ impl Peer<'_> {
             Peer::GlintInstanced(..) => "glint-2level",
             Peer::Obvhs(..) => "obvhs",
             Peer::Embree(..) => "embree",
+            Peer::EmbreeRobust(..) => "embree-robust",
             Peer::Embree16(..) => "embree16",
             Peer::Glint8(..) => "glint8",
             Peer::TinyBvh(..) => "tinybvh8",
@@ -133,7 +137,7 @@ impl Peer<'_> {
                     },
                 )
             }
-            Peer::Embree(s) => count_hits(
+            Peer::Embree(s) | Peer::EmbreeRobust(s) => count_hits(
                 rays,
                 shadow,
                 |r| s.occluded(r, 1.0),
@@ -293,7 +297,7 @@ fn bench_mesh(
         // Embree's SBVH, the like of glint's spatial splits (which glint takes where
         // long triangles make them pay: Sponza; on the tori it builds objects alone).
         let th = time_ms(build_rounds, || {
-            black_box(e1.scene_of_quality(tris, BuildQuality::High).unwrap());
+            black_box(e1.scene_with(tris, BuildQuality::High, false).unwrap());
         });
         println!("  embree high    {} (spatial splits)", ms(th));
     }
@@ -362,8 +366,10 @@ fn bench_mesh(
     if let Ok(t) = &tiny {
         peers.push(Peer::TinyBvh(t));
     }
-    if let Some(s) = &escene {
+    let robust = embree.map(|e| e.scene_with(tris, BuildQuality::Medium, true).unwrap());
+    if let (Some(s), Some(r)) = (&escene, &robust) {
         peers.push(Peer::Embree(s));
+        peers.push(Peer::EmbreeRobust(r));
         peers.push(Peer::Embree16(s));
     }
 

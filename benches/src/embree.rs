@@ -28,6 +28,7 @@ const RTC_BUFFER_TYPE_VERTEX: u32 = 1;
 const RTC_FORMAT_UINT3: u32 = 0x5003;
 const RTC_FORMAT_FLOAT3: u32 = 0x9003;
 const RTC_INVALID_GEOMETRY_ID: u32 = u32::MAX;
+const RTC_SCENE_FLAG_ROBUST: u32 = 1 << 2;
 
 /// `RTCBuildQuality`: how much work a scene's build puts into its BVH.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -111,6 +112,7 @@ struct Api {
     release_scene: unsafe extern "C" fn(Handle),
     commit_scene: unsafe extern "C" fn(Handle),
     set_scene_build_quality: unsafe extern "C" fn(Handle, u32),
+    set_scene_flags: unsafe extern "C" fn(Handle, u32),
     new_geometry: unsafe extern "C" fn(Handle, u32) -> Handle,
     set_new_geometry_buffer: unsafe extern "C" fn(Handle, u32, u32, u32, usize, usize) -> Handle,
     commit_geometry: unsafe extern "C" fn(Handle),
@@ -179,6 +181,7 @@ impl Embree {
             release_scene: sym!("rtcReleaseScene"),
             commit_scene: sym!("rtcCommitScene"),
             set_scene_build_quality: sym!("rtcSetSceneBuildQuality"),
+            set_scene_flags: sym!("rtcSetSceneFlags"),
             new_geometry: sym!("rtcNewGeometry"),
             set_new_geometry_buffer: sym!("rtcSetNewGeometryBuffer"),
             commit_geometry: sym!("rtcCommitGeometry"),
@@ -212,14 +215,17 @@ impl Embree {
 
     /// Builds a scene (Embree's default, medium quality) over `tris`.
     pub fn scene(&self, tris: &[[Vec3; 3]]) -> Result<EmbreeScene<'_>, String> {
-        self.scene_of_quality(tris, BuildQuality::Medium)
+        self.scene_with(tris, BuildQuality::Medium, false)
     }
 
-    /// Builds a scene of build quality `quality` over `tris`.
-    pub fn scene_of_quality(
+    /// Builds a scene of build quality `quality` over `tris`; `robust`: with
+    /// `RTC_SCENE_FLAG_ROBUST` (Embree's conservative traversal and watertight triangle
+    /// test, the guarantees glint's queries always give).
+    pub fn scene_with(
         &self,
         tris: &[[Vec3; 3]],
         quality: BuildQuality,
+        robust: bool,
     ) -> Result<EmbreeScene<'_>, String> {
         let a = &self.api;
         let n = tris.len();
@@ -229,6 +235,9 @@ impl Embree {
             let scene = (a.new_scene)(self.device);
             if !scene.is_null() {
                 (a.set_scene_build_quality)(scene, quality as u32);
+                if robust {
+                    (a.set_scene_flags)(scene, RTC_SCENE_FLAG_ROBUST);
+                }
             }
             let geom = (a.new_geometry)(self.device, RTC_GEOMETRY_TYPE_TRIANGLE);
             let verts = (a.set_new_geometry_buffer)(
