@@ -16,7 +16,8 @@
 //! BVH8_CPU (`Intersect`, `IsOccluded`; AVX2 + FMA) when build.rs could
 //! compile it, see `glint_bench::tinybvh`; Embree 4 when `GLINT_EMBREE_LIB`
 //! names its library (see `glint_bench::embree`; `GLINT_EMBREE_CONFIG` adds device
-//! settings, e.g. `hugepages=1`). Every peer calls its
+//! settings, e.g. `hugepages=1`), as built by default and, as `embree-robust`, with its
+//! robust flag (robust traversal, no arithmetic shortcuts: what glint always does). Every peer calls its
 //! library once per ray. Build times are for one thread and for the global
 //! rayon pool (glint) or Embree's default thread count (Embree's, timed after every
 //! mesh: see `main`); obvhs and tinybvh build on one thread here.
@@ -64,8 +65,8 @@ enum Peer<'a> {
     GlintInstanced(&'a WideBvh, &'a TwoLevelBvh),
     Obvhs(&'a CwBvh, &'a [Triangle]),
     Embree(&'a EmbreeScene<'a>),
-    /// Embree's single rays in a scene built with `RTC_SCENE_FLAG_ROBUST`: its
-    /// conservative traversal and watertight triangle test, glint's guarantees.
+    /// Embree's single rays in a scene built with `RTC_SCENE_FLAG_ROBUST` (robust
+    /// traversal, no optimizations that reduce accuracy: what glint always does).
     EmbreeRobust(&'a EmbreeScene<'a>),
     /// Embree's 16-ray packets over consecutive rays of a set (what packets buy).
     Embree16(&'a EmbreeScene<'a>),

@@ -219,8 +219,8 @@ impl Embree {
     }
 
     /// Builds a scene of build quality `quality` over `tris`; `robust`: with
-    /// `RTC_SCENE_FLAG_ROBUST` (Embree's conservative traversal and watertight triangle
-    /// test, the guarantees glint's queries always give).
+    /// `RTC_SCENE_FLAG_ROBUST` (robust traversal, no optimizations that reduce
+    /// arithmetic accuracy: what glint's queries always do).
     pub fn scene_with(
         &self,
         tris: &[[Vec3; 3]],
