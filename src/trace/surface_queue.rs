@@ -64,7 +64,8 @@ impl SurfaceBlock {
 }
 
 /// Each ray's closest hit as its shading point (`None` for a miss), in queue order,
-/// stored in blocks of `LANES` (8) rays. No hit bit is set at or past `len`.
+/// stored in blocks of `LANES` (8) rays. No hit bit of the queue's blocks is set at or
+/// past `len`.
 #[derive(Clone, Default)]
 pub struct SurfaceQueue {
     /// The queue's blocks, then blocks kept from a longer queue before (not entries).
