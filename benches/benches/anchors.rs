@@ -17,8 +17,8 @@
 //! compile it, see `glint_bench::tinybvh`; Embree 4 when `GLINT_EMBREE_LIB`
 //! names its library (see `glint_bench::embree`; `GLINT_EMBREE_CONFIG` adds device
 //! settings, e.g. `hugepages=1`), as built by default and, as `embree-robust`, with its
-//! robust flag (robust traversal, no arithmetic shortcuts: what glint always does). Every peer calls its
-//! library once per ray. Build times are for one thread and for the global
+//! robust flag (robust traversal, no arithmetic shortcuts: what glint always does).
+//! Every peer calls its library once per ray. Build times are for one thread and for the global
 //! rayon pool (glint) or Embree's default thread count (Embree's, timed after every
 //! mesh: see `main`); obvhs and tinybvh build on one thread here.
 //!
