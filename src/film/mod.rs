@@ -64,13 +64,17 @@ impl Film {
     /// An empty film, allocated fallibly: [`GlintError::Memory`] rather than an abort
     /// when the allocator refuses (the estimate is checked before, in `Renderer::prepare`).
     pub fn try_new(width: u32, height: u32) -> Result<Self> {
-        // Zeroed by the allocator: fresh pages come zeroed from the OS, and are touched
-        // first by the first pass on every thread instead of by a fill on one thread
-        // before it (512x512: 27 MB, the 20 ms of the Cornell render's prepare stage).
-        fn zeroed<T: bytemuck::Zeroable>(n: usize) -> Option<Vec<T>> {
-            bytemuck::allocation::try_zeroed_slice_box(n)
-                .ok()
-                .map(Vec::from)
+        // Zeroed by the allocator (fresh pages come zeroed from the OS), then written
+        // once in parallel: left to the first pass, each page was read first (mapping
+        // the shared zero page) and then written, a copy-on-write fault whose TLB flush
+        // interrupts every other thread of the render (10-15% of a two-thread Cornell
+        // render's CPU time went to those interrupts). A page written first takes one
+        // plain fault.
+        fn zeroed<T: bytemuck::Zeroable + Copy + Send>(n: usize) -> Option<Vec<T>> {
+            let mut v = Vec::from(bytemuck::allocation::try_zeroed_slice_box(n).ok()?);
+            v.par_chunks_mut(FILM_CHUNK)
+                .for_each(|c| c.fill(T::zeroed()));
+            Some(v)
         }
         let n = width as usize * height as usize;
         let film = (|| {
