@@ -170,11 +170,12 @@ def time_glint(binary, size, spp, threads, out):
         cmd += ["--set", s]
     cpu, wall = children_cpu(), time.perf_counter()
     p = subprocess.run(cmd, capture_output=True, text=True, check=True)
-    busy = (children_cpu() - cpu) / (time.perf_counter() - wall)
+    wall = time.perf_counter() - wall
+    busy = (children_cpu() - cpu) / wall
     m = re.search(r"spp, ([0-9.]+) s \(", p.stdout + p.stderr)
     if not m:
         sys.exit(f"cannot read glint's summary: {p.stdout}{p.stderr}")
-    return float(m.group(1)), busy
+    return float(m.group(1)), busy, wall
 
 
 def children_cpu():
@@ -225,14 +226,18 @@ def main():
     # CPU time over wall time per render: the threads that worked, about n for n
     # threads (glint's counts its whole process, scene loading included).
     busy = {r: [] for r in runners}
+    # glint's process from start to exit (scene parsing, image output and process
+    # start-up included), where its summary's render time has two decimals.
+    process = {n: [] for n in threads}
     glint_exr = os.path.join(RESULTS, "glint_cornell.exr")
     for rnd in range(args.rounds):
         for k in range(len(runners)):
             who, n = runners[(rnd + k) % len(runners)]
             if who == "glint":
-                t, b = time_glint(args.glint, args.size, args.spp, n, glint_exr)
+                t, b, w = time_glint(args.glint, args.size, args.spp, n, glint_exr)
                 times[(who, n)].append(t)
                 busy[(who, n)].append(b)
+                process[n].append(w)
                 continue
             mi.set_variant(who)
             dr.set_thread_count(n)
@@ -255,8 +260,10 @@ def main():
         label = "glint (binary, whole run)" if who == "glint" else f"mitsuba {who}"
         b = median_range(busy[(who, n)])[0]
         lines.append(
-            f"{label:27} {n} thread{'s' if n > 1 else ' '}: {fmt(times[(who, n)])}, {b:.2f} threads busy{extra}"
+            f"{label:30} {n} thread{'s' if n > 1 else ' '}: {fmt(times[(who, n)])}, {b:.2f} threads busy{extra}"
         )
+    for n in threads:
+        lines.append(f"{'glint (process, start to exit)':30} {n} thread{'s' if n > 1 else ' '}: {fmt(process[n])}")
     # Ratios within a round cancel most of the load other processes put on a
     # shared machine; the times alone do not.
     for v in variants:
