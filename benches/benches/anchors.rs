@@ -20,7 +20,11 @@
 //! robust flag (robust traversal, no arithmetic shortcuts: what glint always does).
 //! Every peer calls its library once per ray. Build times are for one thread and for the global
 //! rayon pool (glint) or Embree's default thread count (Embree's, timed after every
-//! mesh: see `main`); obvhs and tinybvh build on one thread here.
+//! mesh: see `main`); obvhs and tinybvh (compiled without its threaded builds) build on
+//! one thread here. The one-thread builds are timed in interleaved rounds too, each
+//! with the threads busy in it, then glint's ÷ Embree's per round; on a mesh where
+//! glint's build cuts triangles (spatial splits: Sponza), `glint objects+8` is the same
+//! build without them, the like of Embree's medium build.
 //!
 //! `GLINT_BENCH_ROUNDS` sets the number of rounds (default 7), and
 //! `GLINT_BENCH_RAYS` the rays per set (default 262144).
@@ -29,7 +33,7 @@ use std::hint::black_box;
 use std::time::{Duration, Instant};
 
 use glam::{Vec3, Vec3A};
-use glint::accel::{Bvh, PACKET, Ray, TwoLevelBvh, WideBvh};
+use glint::accel::{Aabb, Bvh, PACKET, Ray, SplitMethod, TwoLevelBvh, WideBvh};
 use glint_bench::embree::{BuildQuality, Embree, EmbreeScene};
 use glint_bench::tinybvh::TinyBvh8;
 use glint_bench::{
@@ -185,13 +189,37 @@ fn count_hits(
         .sum()
 }
 
-/// What `f` returns and the process's CPU time in it over its wall time: about 1 for a
-/// one-thread build (more when another thread worked too).
-fn busy_threads<T>(f: impl FnOnce() -> T) -> (T, f64) {
-    let (cpu, wall) = (process_cpu_ns(), Instant::now());
-    let out = f();
-    let wall = wall.elapsed().as_nanos() as f64;
-    (out, (process_cpu_ns() - cpu) as f64 / wall)
+/// A timed build: its row's label and the build.
+type Build<'a> = (&'static str, Box<dyn FnMut() + 'a>);
+
+/// Each of `builds` timed once per round, the order rotating from round to round (as
+/// the ray sets' rounds): a slow phase of a shared machine then falls on all of them,
+/// where a build's rounds timed one after the other fell on it alone (one-thread builds
+/// were bimodal, 2x apart). Per build, its times in ms, round by round, and the
+/// process's CPU time over wall time in them (the threads busy).
+fn interleaved_ms(rounds: usize, builds: &mut [Build]) -> Vec<(Vec<f64>, f64)> {
+    let mut out = vec![(Vec::new(), 0.0); builds.len()];
+    let mut cpu = vec![0.0; builds.len()];
+    for r in 0..rounds {
+        for k in 0..builds.len() {
+            let i = (r + k) % builds.len();
+            let ((_, build), before, t) = (&mut builds[i], process_cpu_ns(), Instant::now());
+            build();
+            out[i].0.push(t.elapsed().as_secs_f64() * 1e3);
+            cpu[i] += (process_cpu_ns() - before) as f64 / 1e6;
+        }
+    }
+    for (o, cpu) in out.iter_mut().zip(cpu) {
+        o.1 = cpu / o.0.iter().sum::<f64>();
+    }
+    out
+}
+
+/// Median, least and greatest of `v`.
+fn spread(v: &[f64]) -> (f64, f64, f64) {
+    let mut v = v.to_vec();
+    let m = median(&mut v);
+    (m, v[0], v[v.len() - 1])
 }
 
 /// Median and range of `f` over `rounds` runs, in milliseconds.
@@ -235,72 +263,124 @@ fn bench_mesh(
         })
         .collect();
 
-    // Build: one thread each, then all threads where the library can.
+    // Build: one thread each, then all threads where the library can; each set's
+    // rounds interleaved (see `interleaved_ms`).
     let build_rounds = rounds.min(5);
     let glint_build = || WideBvh::collapse(&glint_binary(tris), tris);
-    let ms = |t: (f64, f64, f64)| format!("{:8.1} [{:.1}-{:.1}]", t.0, t.1, t.2);
-    println!(
-        "build, ms median [min-max]: 1 thread | all {} threads",
-        rayon::current_num_threads()
-    );
-    let (g1, busy) = busy_threads(|| {
-        time_ms(build_rounds, || {
-            black_box(one_thread.install(|| glint_binary(tris)));
-        })
-    });
-    let gn = time_ms(build_rounds, || {
-        black_box(glint_binary(tris));
-    });
-    println!(
-        "  glint SAH      {} | {} ({busy:.2} threads busy on one)",
-        ms(g1),
-        ms(gn)
-    );
-    let w1 = time_ms(build_rounds, || {
-        black_box(one_thread.install(glint_build));
-    });
-    let wn = time_ms(build_rounds, || {
-        black_box(glint_build());
-    });
-    println!(
-        "  glint SAH+8    {} | {} (binary, then collapsed to 8-wide)",
-        ms(w1),
-        ms(wn)
-    );
-    let o1 = time_ms(build_rounds, || {
-        black_box(build_cwbvh_from_tris(
-            &otris,
-            BvhBuildParams::medium_build(),
-            &mut Duration::default(),
-        ));
-    });
-    println!("  obvhs medium   {}", ms(o1));
+    // Where the build cut triangles (Sponza), the same build without spatial splits:
+    // the like of Embree's medium build, as glint SAH+8 is of Embree's high one.
+    let cuts = glint_binary(tris).prim_indices.len() > tris.len();
+    let objects = || {
+        let bounds: Vec<Aabb> = tris.iter().map(|t| Aabb::from_points(t)).collect();
+        WideBvh::collapse(&Bvh::build(&bounds, SplitMethod::SahBinned), tris)
+    };
     let tiny = TinyBvh8::build(tris);
-    match &tiny {
-        Ok(_) => {
-            let t1 = time_ms(build_rounds, || {
-                black_box(TinyBvh8::build(tris).unwrap());
-            });
-            println!("  tinybvh8       {} (BVH8_CPU::Build)", ms(t1));
-        }
-        Err(e) => println!("  skipping tinybvh: {e}"),
+    let mut one: Vec<Build> = vec![
+        (
+            "glint SAH",
+            Box::new(|| drop(black_box(one_thread.install(|| glint_binary(tris))))),
+        ),
+        (
+            "glint SAH+8",
+            Box::new(|| drop(black_box(one_thread.install(glint_build)))),
+        ),
+    ];
+    let mut all: Vec<Build> = vec![
+        (
+            "glint SAH",
+            Box::new(|| drop(black_box(glint_binary(tris)))),
+        ),
+        ("glint SAH+8", Box::new(|| drop(black_box(glint_build())))),
+    ];
+    if cuts {
+        one.push((
+            "glint objects+8",
+            Box::new(|| drop(black_box(one_thread.install(objects)))),
+        ));
+        all.push(("glint objects+8", Box::new(|| drop(black_box(objects())))));
+    }
+    one.push((
+        "obvhs medium",
+        Box::new(|| {
+            black_box(build_cwbvh_from_tris(
+                &otris,
+                BvhBuildParams::medium_build(),
+                &mut Duration::default(),
+            ));
+        }),
+    ));
+    if tiny.is_ok() {
+        one.push((
+            "tinybvh8",
+            Box::new(|| drop(black_box(TinyBvh8::build(tris).unwrap()))),
+        ));
     }
     if let Some(e1) = embree {
-        let (t1, busy) = busy_threads(|| {
-            time_ms(build_rounds, || {
-                black_box(e1.scene(tris).unwrap());
-            })
-        });
-        println!(
-            "  embree medium  {} | at the end ({busy:.2} threads busy on one)",
-            ms(t1)
-        );
+        one.push((
+            "embree medium",
+            Box::new(|| drop(black_box(e1.scene(tris).unwrap()))),
+        ));
         // Embree's SBVH, the like of glint's spatial splits (which glint takes where
         // long triangles make them pay: Sponza; on the tori it builds objects alone).
-        let th = time_ms(build_rounds, || {
-            black_box(e1.scene_with(tris, BuildQuality::High, false).unwrap());
-        });
-        println!("  embree high    {} (spatial splits)", ms(th));
+        one.push((
+            "embree high",
+            Box::new(|| {
+                drop(black_box(
+                    e1.scene_with(tris, BuildQuality::High, false).unwrap(),
+                ))
+            }),
+        ));
+    }
+    let one_times = interleaved_ms(build_rounds, &mut one);
+    let all_times = interleaved_ms(build_rounds, &mut all);
+    let labels: Vec<&str> = one.iter().map(|(label, _)| *label).collect();
+    let all_labels: Vec<&str> = all.iter().map(|(label, _)| *label).collect();
+    drop((one, all));
+    let ms = |t: &[f64]| {
+        let (m, lo, hi) = spread(t);
+        format!("{m:8.1} [{lo:.1}-{hi:.1}]")
+    };
+    println!(
+        "build, ms median [min-max], rounds interleaved: 1 thread | all {} threads; \
+         threads busy on one",
+        rayon::current_num_threads()
+    );
+    for (i, label) in labels.iter().enumerate() {
+        let (times, busy) = &one_times[i];
+        let many = match all_labels.iter().position(|l| l == label) {
+            Some(j) => format!(" | {}", ms(&all_times[j].0)),
+            None if *label == "embree medium" => " | at the end".into(),
+            None => String::new(),
+        };
+        let note = match *label {
+            "glint SAH+8" => " (binary, then collapsed to 8-wide)",
+            "glint objects+8" => " (no spatial splits, as Embree medium)",
+            "tinybvh8" => " (BVH8_CPU::Build)",
+            "embree high" => " (spatial splits)",
+            _ => "",
+        };
+        println!("  {label:15} {}{many} ({busy:.2} busy){note}", ms(times));
+    }
+    if let Err(e) = &tiny {
+        println!("  skipping tinybvh: {e}");
+    }
+    // Per round: both builds timed within a few hundred milliseconds of each other.
+    let row = |label: &str| labels.iter().position(|l| *l == label);
+    for (a, b) in [
+        ("glint SAH+8", "embree medium"),
+        ("glint objects+8", "embree medium"),
+        ("glint SAH+8", "embree high"),
+    ] {
+        if let (Some(a), Some(b)) = (row(a), row(b)) {
+            let ratios: Vec<f64> = (one_times[a].0.iter().zip(&one_times[b].0))
+                .map(|(x, y)| x / y)
+                .collect();
+            let (m, lo, hi) = spread(&ratios);
+            println!(
+                "  {} ÷ {}, 1 thread, per round: {m:.2} [{lo:.2}-{hi:.2}]",
+                labels[a], labels[b]
+            );
+        }
     }
 
     let bvh = glint_binary(tris);
