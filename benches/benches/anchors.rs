@@ -194,9 +194,10 @@ type Build<'a> = (&'static str, Box<dyn FnMut() + 'a>);
 
 /// Each of `builds` timed once per round, the order rotating from round to round (as
 /// the ray sets' rounds): a slow phase of a shared machine then falls on all of them,
-/// where a build's rounds timed one after the other fell on it alone (one-thread builds
-/// were bimodal, 2x apart). Per build, its times in ms, round by round, and the
-/// process's CPU time over wall time in them (the threads busy).
+/// where a build's rounds timed one after the other fell on it alone. (glint's rounds
+/// still have slow ones on a VM that reports freed memory to its host: see
+/// docs/benchmarks.md, twentieth session.) Per build, its times in ms, round by round,
+/// and the process's CPU time over wall time in them (the threads busy).
 fn interleaved_ms(rounds: usize, builds: &mut [Build]) -> Vec<(Vec<f64>, f64)> {
     let mut out = vec![(Vec::new(), 0.0); builds.len()];
     let mut cpu = vec![0.0; builds.len()];
