@@ -365,7 +365,7 @@ fn bench_mesh(
     if let Err(e) = &tiny {
         println!("  skipping tinybvh: {e}");
     }
-    // Per round: both builds timed within a few hundred milliseconds of each other.
+    // Per round: the two builds of each pair timed in the same round.
     let row = |label: &str| labels.iter().position(|l| *l == label);
     for (a, b) in [
         ("glint SAH+8", "embree medium"),
