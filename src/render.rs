@@ -157,6 +157,9 @@ pub struct Renderer {
     /// The world: scene entities, settings and render resources.
     pub world: World,
     prepared: bool,
+    /// The film was made by `prepare` and holds no sample yet: the first pass loop
+    /// writes its pages first (`Film::write_zeros`).
+    film_fresh: bool,
     started: Option<Instant>,
     prepare_time: Duration,
     interrupt: Option<Arc<AtomicBool>>,
@@ -240,6 +243,7 @@ impl Renderer {
         Self {
             world,
             prepared: false,
+            film_fresh: false,
             started: None,
             prepare_time: Duration::ZERO,
             interrupt: None,
@@ -280,6 +284,7 @@ impl Renderer {
         self.ensure_memory(&camera)?;
         let film = Film::try_new(camera.width, camera.height)?;
         self.world.insert_resource(film);
+        self.film_fresh = true;
         self.prepared = true;
         let result = run_prepare(&mut self.world);
         self.prepare_time = start.elapsed();
@@ -337,8 +342,11 @@ impl Renderer {
             self.prepared = false;
             self.started = None;
         }
+        // From the memory of the film it replaces, most often: already the process's
+        // own and zeroed by the allocator, so nothing to write first.
         self.world
             .insert_resource(Film::new(camera.width, camera.height));
+        self.film_fresh = false;
     }
 
     /// Stops renders when `flag` is set (e.g. by Ctrl-C): checked before every
@@ -360,6 +368,18 @@ impl Renderer {
         0..film.width * film.height
     }
 
+    /// Before the first samples of a film made by `prepare`: writes its pages over the
+    /// pixels `ranges` the render will trace (`Film::write_zeros`). Once per film.
+    fn write_fresh_film(&mut self, ranges: &[std::ops::Range<u32>]) {
+        if std::mem::take(&mut self.film_fresh) {
+            let ranges: Vec<_> = ranges
+                .iter()
+                .map(|r| r.start as usize..r.end as usize)
+                .collect();
+            self.world.resource_mut::<Film>().write_zeros(&ranges);
+        }
+    }
+
     /// Traces sample index `sample` for every pixel, region by region; `progress`
     /// receives the pixels done after each region. An interrupt leaves the pass
     /// partial: the first regions hold one sample more than the others.
@@ -370,6 +390,7 @@ impl Renderer {
     ) -> Result<()> {
         self.prepare()?;
         let pixels = self.all_pixels();
+        self.write_fresh_film(std::slice::from_ref(&pixels));
         let mut control = Control {
             interrupt: self.interrupt.clone(),
             budget: None,
@@ -393,6 +414,7 @@ impl Renderer {
         let start = self.started.unwrap_or_else(Instant::now);
         let n = self.samples_per_pixel();
         let pixels = self.all_pixels();
+        self.write_fresh_film(std::slice::from_ref(&pixels));
         let mut control = Control {
             interrupt: self.interrupt.clone(),
             budget,
@@ -430,6 +452,7 @@ impl Renderer {
         let method = EstimateMethod::for_settings(&settings);
         let step = check_every(&settings);
         let pixels = self.all_pixels();
+        self.write_fresh_film(std::slice::from_ref(&pixels));
         let mut control = Control {
             interrupt: self.interrupt.clone(),
             budget: None,
@@ -497,6 +520,7 @@ impl Renderer {
             progress,
         };
         let rows = crop.pixel_ranges(width);
+        self.write_fresh_film(&rows);
         let mut done = 0;
         // On one rayon worker, as in `run_passes`: one hand-off per render, not per region.
         rayon::scope(|_| -> Result<()> {

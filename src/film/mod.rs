@@ -64,17 +64,12 @@ impl Film {
     /// An empty film, allocated fallibly: [`GlintError::Memory`] rather than an abort
     /// when the allocator refuses (the estimate is checked before, in `Renderer::prepare`).
     pub fn try_new(width: u32, height: u32) -> Result<Self> {
-        // Zeroed by the allocator (fresh pages come zeroed from the OS), then written
-        // once in parallel: left to the first pass, each page was read first (mapping
-        // the shared zero page) and then written, a copy-on-write fault whose TLB flush
-        // interrupts every other thread of the render (10-15% of a two-thread Cornell
-        // render's CPU time went to those interrupts). A page written first takes one
-        // plain fault.
-        fn zeroed<T: bytemuck::Zeroable + Copy + Send>(n: usize) -> Option<Vec<T>> {
-            let mut v = Vec::from(bytemuck::allocation::try_zeroed_slice_box(n).ok()?);
-            v.par_chunks_mut(FILM_CHUNK)
-                .for_each(|c| c.fill(T::zeroed()));
-            Some(v)
+        // Zeroed by the allocator: fresh pages come zeroed from the OS, and only those of
+        // the pixels a render traces become the process's (see `write_zeros`).
+        fn zeroed<T: bytemuck::Zeroable>(n: usize) -> Option<Vec<T>> {
+            bytemuck::allocation::try_zeroed_slice_box(n)
+                .ok()
+                .map(Vec::from)
         }
         let n = width as usize * height as usize;
         let film = (|| {
@@ -95,6 +90,40 @@ impl Film {
                 needed: n as u64 * Self::BYTES_PER_PIXEL,
             })
         })
+    }
+
+    /// Writes zeros over the pixels `ranges` (row-major indices, in order, disjoint) of a
+    /// film that holds no sample there yet, in parallel. A fresh film comes zeroed from
+    /// the allocator, but left to the first pass, each of its pages was read first
+    /// (mapping the shared zero page) and then written: a copy-on-write fault whose TLB
+    /// flush interrupts every other thread of the render (10-15% of a two-thread Cornell
+    /// render's CPU time went to those interrupts). A page written first takes one plain
+    /// fault. Only the pixels a render traces: a part of a split render writes its
+    /// crop's rows alone.
+    pub fn write_zeros(&mut self, ranges: &[std::ops::Range<usize>]) {
+        fn zeros<T: bytemuck::Zeroable + Copy + Send>(
+            v: &mut [T],
+            ranges: &[std::ops::Range<usize>],
+        ) {
+            let (mut rest, mut offset) = (v, 0);
+            let mut parts = Vec::with_capacity(ranges.len());
+            for r in ranges {
+                assert!(offset <= r.start, "film ranges out of order");
+                let (part, tail) = rest[r.start - offset..].split_at_mut(r.len());
+                parts.push(part);
+                (rest, offset) = (tail, r.end);
+            }
+            parts
+                .into_par_iter()
+                .flat_map(|p| p.par_chunks_mut(FILM_CHUNK))
+                .for_each(|c| c.fill(T::zeroed()));
+        }
+        zeros(&mut self.sum, ranges);
+        zeros(&mut self.count, ranges);
+        zeros(&mut self.m2, ranges);
+        zeros(&mut self.replica_sum, ranges);
+        zeros(&mut self.replica_count, ranges);
+        zeros(&mut self.err, ranges);
     }
 
     /// The mean radiance of pixel `(x, y)` (black before any sample).
@@ -368,6 +397,39 @@ pub fn write_atomically(path: &Path, bytes: &[u8]) -> Result<()> {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// `write_zeros` writes zeros over its ranges in every array and leaves every other
+    /// pixel as it was: ranges of one pixel, of several chunks, next to each other.
+    #[test]
+    fn write_zeros_writes_its_ranges_alone() {
+        let n = 3 * FILM_CHUNK + 40;
+        let mut film = Film::new(n as u32, 1);
+        let one = DVec3::ONE;
+        for v in [
+            &mut film.sum,
+            &mut film.m2,
+            &mut film.replica_sum,
+            &mut film.err,
+        ] {
+            v.fill(one);
+        }
+        film.count.fill(1);
+        film.replica_count.fill(1);
+        let ranges = [
+            3..4,
+            10..10 + 2 * FILM_CHUNK + 7,
+            10 + 2 * FILM_CHUNK + 7..n - 5,
+        ];
+        film.write_zeros(&ranges);
+        for i in 0..n {
+            let inside = ranges.iter().any(|r| r.contains(&i));
+            let (v, c) = if inside { (DVec3::ZERO, 0) } else { (one, 1) };
+            for a in [&film.sum, &film.m2, &film.replica_sum, &film.err] {
+                assert_eq!(a[i], v, "pixel {i}");
+            }
+            assert_eq!((film.count[i], film.replica_count[i]), (c, c), "pixel {i}");
+        }
+    }
 
     /// A region of several of `accumulate_film`'s chunks, not starting at pixel 0, with
     /// non-finite samples on both sides of a chunk's edge: every pixel gets its own
