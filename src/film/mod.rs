@@ -99,7 +99,7 @@ impl Film {
     /// flush interrupts every other thread of the render (10-15% of a two-thread Cornell
     /// render's CPU time went to those interrupts). A page written first takes one plain
     /// fault. Only the pixels a render traces: a part of a split render writes its
-    /// crop's rows alone.
+    /// crop's rows alone. Panics when the ranges are out of order or past the film.
     pub fn write_zeros(&mut self, ranges: &[std::ops::Range<usize>]) {
         fn zeros<T: bytemuck::Zeroable + Copy + Send>(
             v: &mut [T],
