@@ -1,12 +1,13 @@
 //! What the first write to fresh memory costs on this machine, per 2 MiB, for the BVH's
 //! arrays as glint keeps them (`HugeVec`: a huge-page-advised mapping) and on the heap:
 //! `cargo run --release -p glint-bench --example page_touch -- [MiB] [idle s] [rounds]`
-//! (defaults 64, 3, 3). The first array of each kind is timed alone; then each round takes a fresh array, writes a byte in every 4 KiB
-//! page, and drops it; "hot" rounds follow one another (the pages just given back are
-//! taken again), "idle" rounds wait `idle` seconds first. On a VM that reports freed
-//! memory to its host (`page_reporting` in the guest kernel), idle pages were handed
-//! back and the host must fault them in again: the builds' slow rounds in the anchors
-//! bench (docs/benchmarks.md, twentieth and twenty-first sessions).
+//! (defaults 64, 3, 3). The first array of each kind is timed alone; then each round
+//! takes a fresh array, writes a byte in every 4 KiB page, and drops it; "hot" rounds
+//! follow one another (the pages just given back are taken again), "idle" rounds wait
+//! `idle` seconds first. On a VM that reports freed memory to its host
+//! (`page_reporting` in the guest kernel), idle pages were handed back and the host must
+//! fault them in again: part of what a build pays there (docs/benchmarks.md, twentieth
+//! and twenty-first sessions; most of the anchors' slow build rounds are something else).
 
 use std::time::{Duration, Instant};
 
