@@ -13,6 +13,8 @@
 # `sponza` needs ../shared/assets (the example prints why it skips without it).
 # With GLINT_RAYS_PACKETS=1 in the environment, every row traces packets of 8
 # consecutive rays (WideBvh::occluded_packet, closest_packet) instead of single rays.
+# With GLINT_RAYS_EMBREE=1 (and GLINT_EMBREE_LIB), Embree traces the ray sets, one call
+# a ray, for its counts beside glint's (the build row stays glint's).
 # Under valgrind the AVX2 + FMA clone of the queries runs when the host CPU
 # has them, as natively.
 set -euo pipefail

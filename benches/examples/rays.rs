@@ -8,11 +8,16 @@
 //! bench does; without that folder the example says so and exits.
 //! With `GLINT_RAYS_PACKETS` set, every set goes 8 consecutive rays at a time through
 //! `WideBvh::occluded_packet` or `closest_packet_within` (as the render traces its rays).
+//! With `GLINT_RAYS_EMBREE` set, Embree traces the sets instead (its default build on a
+//! `threads=1` device, one `rtcIntersect1` or `rtcOccluded1` a ray, as in the anchors
+//! bench; the library named by `GLINT_EMBREE_LIB`), for its instructions per ray beside
+//! glint's; the build counted is still glint's.
 
 use std::hint::black_box;
 
 use glam::Vec3;
 use glint::accel::{PACKET, Ray, WideBvh};
+use glint_bench::embree::{Embree, EmbreeScene};
 use glint_bench::{
     View, assets_dir, displaced_torus, find_file, glint_binary, glint_wide_hits, incoherent_rays,
     load_model, primary_rays, shadow_rays, thread_cpu_ns,
@@ -26,10 +31,29 @@ fn trace_build(tris: &[[Vec3; 3]]) -> (WideBvh, f64) {
     (WideBvh::collapse(&bvh, tris), bvh.sah_cost())
 }
 
-/// The queries the anchors bench times for glint: any-hit up to t = 1 for
-/// shadow rays, closest hit without a bound otherwise; returns the hits.
+/// What traces the ray sets.
+enum Tracer<'a> {
+    Glint(&'a WideBvh),
+    Embree(&'a EmbreeScene<'a>),
+}
+
+/// The queries the anchors bench times: any-hit up to t = 1 for shadow rays, closest
+/// hit without a bound otherwise; returns the hits.
 #[inline(never)]
-fn trace_rays(wide: &WideBvh, rays: &[Ray], shadow: bool) -> u32 {
+fn trace_rays(tracer: &Tracer, rays: &[Ray], shadow: bool) -> u32 {
+    let wide = match tracer {
+        Tracer::Glint(wide) => wide,
+        Tracer::Embree(scene) => {
+            let hit = |r: &&Ray| {
+                if shadow {
+                    scene.occluded(r, 1.0)
+                } else {
+                    scene.closest(r).is_some()
+                }
+            };
+            return rays.iter().filter(hit).count() as u32;
+        }
+    };
     if std::env::var_os("GLINT_RAYS_PACKETS").is_some() {
         let t_max = [if shadow { 1.0 } else { f32::INFINITY }; PACKET];
         return rays
@@ -90,6 +114,21 @@ fn main() {
         (displaced_torus(arg(1, 158)), View::torus())
     };
     let (wide, sah_cost) = trace_build(&tris);
+    let embree = match std::env::var_os("GLINT_RAYS_EMBREE").map(|_| Embree::load("threads=1")) {
+        Some(Ok(e)) => Some(e),
+        Some(Err(e)) => {
+            glint_bench::outln!("skipping embree: {e}");
+            return;
+        }
+        None => None,
+    };
+    let scene = embree
+        .as_ref()
+        .map(|e| e.scene(&tris).expect("an Embree scene"));
+    let tracer = match &scene {
+        Some(scene) => Tracer::Embree(scene),
+        None => Tracer::Glint(&wide),
+    };
     let side = (n_rays as f64).sqrt() as usize;
     let sets = [
         ("primary", primary_rays(&view, side, side)),
@@ -97,7 +136,7 @@ fn main() {
         ("shadow", shadow_rays(&tris, &view, n_rays)),
     ];
     for (name, rays) in &sets {
-        let hits = black_box(trace_rays(&wide, rays, *name == "shadow"));
+        let hits = black_box(trace_rays(&tracer, rays, *name == "shadow"));
         glint_bench::outln!("{name} {} rays {hits} hits", rays.len());
     }
     // With GLINT_RAYS_REPEAT=k: k rounds of the three sets, each round tracing each set
@@ -113,7 +152,7 @@ fn main() {
         for _ in 0..repeat {
             for (k, (name, rays)) in sets.iter().enumerate() {
                 let start = thread_cpu_ns();
-                black_box(trace_rays(&wide, rays, *name == "shadow"));
+                black_box(trace_rays(&tracer, rays, *name == "shadow"));
                 ms[k].push((thread_cpu_ns() - start) as f64 * 1e-6);
             }
         }
