@@ -362,10 +362,13 @@ impl Renderer {
             .is_some_and(|f| f.load(Ordering::Relaxed))
     }
 
-    /// Every pixel, as row-major indices.
-    fn all_pixels(&self) -> std::ops::Range<u32> {
+    /// Every pixel, as row-major indices, for a render of the whole film about to trace
+    /// them (a fresh film's pages written first: `write_fresh_film`).
+    fn all_pixels(&mut self) -> std::ops::Range<u32> {
         let film = self.world.resource::<Film>();
-        0..film.width * film.height
+        let pixels = 0..film.width * film.height;
+        self.write_fresh_film(std::slice::from_ref(&pixels));
+        pixels
     }
 
     /// Before the first samples of a film made by `prepare`: writes its pages over the
@@ -390,7 +393,6 @@ impl Renderer {
     ) -> Result<()> {
         self.prepare()?;
         let pixels = self.all_pixels();
-        self.write_fresh_film(std::slice::from_ref(&pixels));
         let mut control = Control {
             interrupt: self.interrupt.clone(),
             budget: None,
@@ -414,7 +416,6 @@ impl Renderer {
         let start = self.started.unwrap_or_else(Instant::now);
         let n = self.samples_per_pixel();
         let pixels = self.all_pixels();
-        self.write_fresh_film(std::slice::from_ref(&pixels));
         let mut control = Control {
             interrupt: self.interrupt.clone(),
             budget,
@@ -452,7 +453,6 @@ impl Renderer {
         let method = EstimateMethod::for_settings(&settings);
         let step = check_every(&settings);
         let pixels = self.all_pixels();
-        self.write_fresh_film(std::slice::from_ref(&pixels));
         let mut control = Control {
             interrupt: self.interrupt.clone(),
             budget: None,

@@ -33,13 +33,13 @@ use std::hint::black_box;
 use std::time::{Duration, Instant};
 
 use glam::{Vec3, Vec3A};
-use glint::accel::{Aabb, Bvh, PACKET, Ray, SplitMethod, TwoLevelBvh, WideBvh};
+use glint::accel::{Bvh, PACKET, Ray, TwoLevelBvh, WideBvh};
 use glint_bench::embree::{BuildQuality, Embree, EmbreeScene};
 use glint_bench::tinybvh::TinyBvh8;
 use glint_bench::{
     View, assets_dir, cornell_scene, displaced_torus, find_file, glint_binary, glint_closest,
-    glint_occluded, incoherent_rays, load_instanced, load_model, primary_rays, process_cpu_ns,
-    shadow_rays,
+    glint_occluded, glint_wide, glint_wide_objects, incoherent_rays, load_instanced, load_model,
+    primary_rays, process_cpu_ns, shadow_rays,
 };
 use obvhs::BvhBuildParams;
 use obvhs::cwbvh::{CwBvh, builder::build_cwbvh_from_tris};
@@ -195,9 +195,10 @@ type Build<'a> = (&'static str, Box<dyn FnMut() + 'a>);
 /// Each of `builds` timed once per round, the order rotating from round to round (as
 /// the ray sets' rounds): a slow phase of a shared machine then falls on all of them,
 /// where a build's rounds timed one after the other fell on it alone. (glint's rounds
-/// still have slow ones on a VM that reports freed memory to its host: see
-/// docs/benchmarks.md, twentieth session.) Per build, its times in ms, round by round,
-/// and the process's CPU time over wall time in them (the threads busy).
+/// still come in slow phases on a shared VM: see docs/benchmarks.md, twentieth and
+/// twenty-first sessions, and `scripts/callgrind_build.sh` for counts that do not.) Per
+/// build, its times in ms, round by round, and the process's CPU time over wall time in
+/// them (the threads busy).
 fn interleaved_ms(rounds: usize, builds: &mut [Build]) -> Vec<(Vec<f64>, f64)> {
     let mut out = vec![(Vec::new(), 0.0); builds.len()];
     let mut cpu = vec![0.0; builds.len()];
@@ -225,15 +226,14 @@ fn spread(v: &[f64]) -> (f64, f64, f64) {
 
 /// Median and range of `f` over `rounds` runs, in milliseconds.
 fn time_ms(rounds: usize, mut f: impl FnMut()) -> (f64, f64, f64) {
-    let mut v: Vec<f64> = (0..rounds)
+    let v: Vec<f64> = (0..rounds)
         .map(|_| {
             let t = Instant::now();
             f();
             t.elapsed().as_secs_f64() * 1e3
         })
         .collect();
-    let m = median(&mut v);
-    (m, v[0], v[v.len() - 1])
+    spread(&v)
 }
 
 /// `embree`: a one-thread device (Embree's builds on all threads are timed after every
@@ -267,14 +267,11 @@ fn bench_mesh(
     // Build: one thread each, then all threads where the library can; each set's
     // rounds interleaved (see `interleaved_ms`).
     let build_rounds = rounds.min(5);
-    let glint_build = || WideBvh::collapse(&glint_binary(tris), tris);
+    let glint_build = || glint_wide(tris);
     // Where the build cut triangles (Sponza), the same build without spatial splits:
     // the like of Embree's medium build, as glint SAH+8 is of Embree's high one.
     let cuts = glint_binary(tris).prim_indices.len() > tris.len();
-    let objects = || {
-        let bounds: Vec<Aabb> = tris.iter().map(|t| Aabb::from_points(t)).collect();
-        WideBvh::collapse(&Bvh::build(&bounds, SplitMethod::SahBinned), tris)
-    };
+    let objects = || glint_wide_objects(tris);
     let tiny = TinyBvh8::build(tris);
     let mut one: Vec<Build> = vec![
         (

@@ -14,7 +14,7 @@ use criterion::{
     BenchmarkId, Criterion, SamplingMode, Throughput, criterion_group, criterion_main,
 };
 use glam::{Vec3, Vec3A};
-use glint::accel::{Aabb, Bvh, Ray, SplitMethod};
+use glint::accel::{Bvh, Ray, SplitMethod};
 use glint_bench::{
     View, displaced_sphere, find_file, glint_closest, glint_occluded, incoherent_rays, load_model,
     primary_rays, shadow_rays,
@@ -51,7 +51,7 @@ struct Budget {
 
 fn bench_mesh(c: &mut Criterion, label: &str, tris: &[[Vec3; 3]], view: &View, budget: &Budget) {
     let samples = budget.samples;
-    let bounds: Vec<Aabb> = tris.iter().map(|t| Aabb::from_points(t)).collect();
+    let bounds = glint_bench::triangle_boxes(tris);
     let otris: Vec<Triangle> = tris
         .iter()
         .map(|t| Triangle {

@@ -7,10 +7,8 @@
 //! pays its first-call setup in the count.
 //!   `cargo run --release -p glint-bench --example build_instructions -- glint|embree [n]`
 
-use glam::Vec3;
-use glint::accel::{Bvh, SplitMethod, WideBvh};
-use glint_bench::displaced_torus;
 use glint_bench::embree::Embree;
+use glint_bench::{displaced_torus, glint_wide};
 
 fn main() {
     let which = std::env::args().nth(1).unwrap_or_default();
@@ -26,7 +24,7 @@ fn main() {
                 .num_threads(1)
                 .build()
                 .expect("a thread pool");
-            let build = || drop(std::hint::black_box(glint_build(&tris)));
+            let build = || drop(std::hint::black_box(glint_wide(&tris)));
             pool.install(build);
             pool.install(|| measured_build(build));
         }
@@ -47,11 +45,6 @@ fn main() {
         }
     }
     glint_bench::outln!("{} triangles", tris.len());
-}
-
-/// glint's build as a render makes it.
-fn glint_build(tris: &[[Vec3; 3]]) -> WideBvh {
-    WideBvh::collapse(&Bvh::build_triangles(tris, SplitMethod::SahBinned), tris)
 }
 
 /// Runs `build`: the function whose instructions callgrind counts.

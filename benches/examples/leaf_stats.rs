@@ -6,12 +6,12 @@
 //!   cargo run --release -p glint-bench --example leaf_stats
 
 use glint::accel::leaf::{LANES, leaf_count};
-use glint::accel::{Aabb, Bvh, SplitMethod, WideBvh};
+use glint::accel::{Bvh, SplitMethod, WideBvh};
 use glint_bench::{assets_dir, cornell_scene, displaced_torus, find_file, load_model};
 
 /// Prints the statistics of the wide BVH over `tris`.
 fn stats(label: &str, tris: &[[glam::Vec3; 3]]) {
-    let bounds: Vec<Aabb> = tris.iter().map(|t| Aabb::from_points(t)).collect();
+    let bounds = glint_bench::triangle_boxes(tris);
     let bvh = Bvh::build(&bounds, SplitMethod::SahBinned);
     let wide = WideBvh::collapse(&bvh, tris);
     let mut bin = [0usize; 17];

@@ -7,7 +7,7 @@ use std::path::{Path, PathBuf};
 
 use glam::{Vec3, vec3};
 use glint::accel::{
-    Bvh, Ray, RayShear, SplitMethod, TwoLevelBvh, WideBvh, intersect_triangle_sheared,
+    Aabb, Bvh, Ray, RayShear, SplitMethod, TwoLevelBvh, WideBvh, intersect_triangle_sheared,
 };
 use glint::test_util::Lcg;
 
@@ -205,6 +205,20 @@ pub fn glint_binary(tris: &[[Vec3; 3]]) -> Bvh {
 /// glint's 8-wide BVH over `tris`, built as a render builds it ([`glint_binary`], collapsed).
 pub fn glint_wide(tris: &[[Vec3; 3]]) -> WideBvh {
     WideBvh::collapse(&glint_binary(tris), tris)
+}
+
+/// The boxes of `tris`, one a triangle.
+pub fn triangle_boxes(tris: &[[Vec3; 3]]) -> Vec<Aabb> {
+    tris.iter().map(|t| Aabb::from_points(t)).collect()
+}
+
+/// glint's 8-wide BVH over `tris` without spatial splits: the binned SAH build over the
+/// triangles' boxes, collapsed (the like of Embree's medium build).
+pub fn glint_wide_objects(tris: &[[Vec3; 3]]) -> WideBvh {
+    WideBvh::collapse(
+        &Bvh::build(&triangle_boxes(tris), SplitMethod::SahBinned),
+        tris,
+    )
 }
 
 /// Traces `rays` one at a time through `wide` as the anchors time glint: any hit in
